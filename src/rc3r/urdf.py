@@ -333,3 +333,13 @@ def load_arm(path: str | Path | None = None, g0: float = G0) -> LoadedArm:
     model.gravity.linear = np.array([0.0, 0.0, -float(g0)])
     params = params_from_model(model, lengths, g0=g0, name=root.get("name", "rr3"))
     return LoadedArm(params=params, model=model, path=str(path))
+
+
+def cmd_make_urdf(args) -> int:
+    """``rc3r make-urdf``: write the URDF of a parameter TOML (default Table 1)."""
+    from .params import load_params, table1
+
+    p = load_params(args.params) if args.params else table1()
+    out = write_urdf(p, args.out)
+    print(f"wrote {out}")
+    return 0

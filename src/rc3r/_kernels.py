@@ -1,0 +1,219 @@
+"""Compiled (numba) kernels of the closed-form model: one state in, arrays filled in place.
+
+These are the single implementation of the paper's formulas; :mod:`rc3r.model`,
+:mod:`rc3r.regressor`, the controllers and the fast plant all call them. Index
+conventions: ``th[0]`` is theta_1 of the paper, ``Y[:, 0]`` its column.
+Derivation and typo fixes: ``docs/model.md``.
+
+Notation: ``s2 = sin q2``, ``c23 = cos(q2 + q3)`` etc.; q1 does not enter.
+With ``P12 = v1 qd2 + qd1 v2``, ``P13 = v1 qd3 + qd1 v3`` and
+``W = qd3 v2 + (qd2 + qd3) v3`` the Slotine-Li regressor is
+``Y(q, qd, v, a) theta = M(q) a + S(q, qd) v + g(q)``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_JIT = dict(cache=True, nogil=True, fastmath=False)
+
+
+@njit(**_JIT)
+def mass_matrix_into(th, q, M):
+    """M(q) (3x3) of section 3.1 (m11 with the s23 typo fixed)."""
+    s2 = math.sin(q[1]); c2 = math.cos(q[1])
+    s3 = math.sin(q[2]); c3 = math.cos(q[2])
+    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
+    M[0, 0] = (th[0] + th[1] * s2 * s2 + th[2] * s2 * c2 + th[3] * s23 * s23 + th[4] * s23 * c23
+               + 2.0 * th[5] * c2 * s23 + 2.0 * th[6] * c2 * c23)
+    m13 = th[9] * c23 + th[10] * s23
+    M[0, 1] = th[7] * c2 + th[8] * s2 + m13
+    M[0, 2] = m13
+    M[1, 1] = th[11] + 2.0 * th[5] * s3 + 2.0 * th[6] * c3
+    M[1, 2] = th[12] + th[5] * s3 + th[6] * c3
+    M[2, 2] = th[12]
+    M[1, 0] = M[0, 1]
+    M[2, 0] = M[0, 2]
+    M[2, 1] = M[1, 2]
+
+
+@njit(**_JIT)
+def coriolis_into(th, q, qd, S):
+    """The paper's factorization S(q, qd) (3x3); equals the Christoffel-symbol matrix."""
+    s2 = math.sin(q[1]); c2 = math.cos(q[1])
+    s3 = math.sin(q[2]); c3 = math.cos(q[2])
+    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
+    # B = (1/2) dm11/dq3, A = (1/2) dm11/dq2, D = dm12/dq2, E = dm13/dq3, F = dm23/dq3
+    B = (th[3] * c23 * s23 + 0.5 * th[4] * (c23 * c23 - s23 * s23)
+         + th[5] * c2 * c23 - th[6] * c2 * s23)
+    A = (th[1] * c2 * s2 + 0.5 * th[2] * (c2 * c2 - s2 * s2) + th[3] * c23 * s23
+         + 0.5 * th[4] * (c23 * c23 - s23 * s23) + th[5] * (c2 * c23 - s2 * s23)
+         - th[6] * (s2 * c23 + c2 * s23))
+    E = -th[9] * s23 + th[10] * c23
+    D = -th[7] * s2 + th[8] * c2 + E
+    F = th[5] * c3 - th[6] * s3
+    S[0, 0] = qd[1] * A + qd[2] * B
+    S[0, 1] = qd[0] * A + qd[1] * D + qd[2] * E
+    S[0, 2] = qd[0] * B + (qd[1] + qd[2]) * E
+    S[1, 0] = -qd[0] * A
+    S[1, 1] = qd[2] * F
+    S[1, 2] = (qd[1] + qd[2]) * F
+    S[2, 0] = -qd[0] * B
+    S[2, 1] = -qd[1] * F
+    S[2, 2] = 0.0
+
+
+@njit(**_JIT)
+def gravity_into(th, q, l2, g0, g):
+    """g(q) (3,) of section 3.1; theta_6, theta_7 enter divided by l2."""
+    s2 = math.sin(q[1]); c2 = math.cos(q[1])
+    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
+    g3 = g0 * (th[6] * c23 + th[5] * s23) / l2
+    g[0] = 0.0
+    g[1] = g0 * (th[13] * c2 + th[14] * s2) + g3
+    g[2] = g3
+
+
+@njit(**_JIT)
+def slotine_li_into(q, qd, v, a, l2, g0, Y):
+    """Y(q, qd, v, a) (3x15) with ``Y theta = M a + S(q, qd) v + g`` (derived, docs/model.md)."""
+    s2 = math.sin(q[1]); c2 = math.cos(q[1])
+    s3 = math.sin(q[2]); c3 = math.cos(q[2])
+    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
+    P12 = v[0] * qd[1] + qd[0] * v[1]
+    P13 = v[0] * qd[2] + qd[0] * v[2]
+    W = qd[2] * v[1] + (qd[1] + qd[2]) * v[2]
+    w11 = qd[0] * v[0]
+    w22 = qd[1] * v[1]
+    cs2 = c2 * s2; d2 = 0.5 * (c2 * c2 - s2 * s2)
+    cs23 = c23 * s23; d23 = 0.5 * (c23 * c23 - s23 * s23)
+    k6 = c2 * c23 - s2 * s23      # cos(2 q2 + q3)
+    k7 = s2 * c23 + c2 * s23      # sin(2 q2 + q3)
+    gl = g0 / l2
+    a23 = a[1] + a[2]
+    for i in range(3):
+        for j in range(15):
+            Y[i, j] = 0.0
+    # row 1: m11 a1 + m12 a2 + m13 a3 + (S v)_1
+    Y[0, 0] = a[0]
+    Y[0, 1] = a[0] * s2 * s2 + P12 * cs2
+    Y[0, 2] = a[0] * cs2 + P12 * d2
+    Y[0, 3] = a[0] * s23 * s23 + (P12 + P13) * cs23
+    Y[0, 4] = a[0] * cs23 + (P12 + P13) * d23
+    Y[0, 5] = 2.0 * a[0] * c2 * s23 + P12 * k6 + P13 * c2 * c23
+    Y[0, 6] = 2.0 * a[0] * c2 * c23 - P12 * k7 - P13 * c2 * s23
+    Y[0, 7] = a[1] * c2 - w22 * s2
+    Y[0, 8] = a[1] * s2 + w22 * c2
+    Y[0, 9] = a23 * c23 - (w22 + W) * s23
+    Y[0, 10] = a23 * s23 + (w22 + W) * c23
+    # row 2: m12 a1 + m22 a2 + m23 a3 + (S v)_2 + g2
+    Y[1, 1] = -w11 * cs2
+    Y[1, 2] = -w11 * d2
+    Y[1, 3] = -w11 * cs23
+    Y[1, 4] = -w11 * d23
+    Y[1, 5] = (2.0 * a[1] + a[2]) * s3 - w11 * k6 + W * c3 + gl * s23
+    Y[1, 6] = (2.0 * a[1] + a[2]) * c3 + w11 * k7 - W * s3 + gl * c23
+    Y[1, 7] = a[0] * c2
+    Y[1, 8] = a[0] * s2
+    Y[1, 9] = a[0] * c23
+    Y[1, 10] = a[0] * s23
+    Y[1, 11] = a[1]
+    Y[1, 12] = a[2]
+    Y[1, 13] = g0 * c2
+    Y[1, 14] = g0 * s2
+    # row 3: m13 a1 + m23 a2 + m33 a3 + (S v)_3 + g3
+    Y[2, 3] = -w11 * cs23
+    Y[2, 4] = -w11 * d23
+    Y[2, 5] = a[1] * s3 - w11 * c2 * c23 - w22 * c3 + gl * s23
+    Y[2, 6] = a[1] * c3 + w11 * c2 * s23 + w22 * s3 + gl * c23
+    Y[2, 9] = a[0] * c23
+    Y[2, 10] = a[0] * s23
+    Y[2, 12] = a23
+
+
+@njit(**_JIT)
+def solve_spd3(M, b, x):
+    """x = M^{-1} b for a symmetric positive-definite 3x3 M (unrolled Cholesky).
+
+    Returns False (x untouched) if M is not numerically positive definite.
+    """
+    l11sq = M[0, 0]
+    if not l11sq > 0.0:
+        return False
+    l11 = math.sqrt(l11sq)
+    l21 = M[1, 0] / l11
+    l31 = M[2, 0] / l11
+    l22sq = M[1, 1] - l21 * l21
+    if not l22sq > 0.0:
+        return False
+    l22 = math.sqrt(l22sq)
+    l32 = (M[2, 1] - l31 * l21) / l22
+    l33sq = M[2, 2] - l31 * l31 - l32 * l32
+    if not l33sq > 0.0:
+        return False
+    l33 = math.sqrt(l33sq)
+    y1 = b[0] / l11
+    y2 = (b[1] - l21 * y1) / l22
+    y3 = (b[2] - l31 * y1 - l32 * y2) / l33
+    x[2] = y3 / l33
+    x[1] = (y2 - l32 * x[2]) / l22
+    x[0] = (y1 - l21 * x[1] - l31 * x[2]) / l11
+    return True
+
+
+@njit(**_JIT)
+def forward_dynamics_into(th, q, qd, u, l2, g0, qdd, work33, work3):
+    """qdd = M^{-1} (u - S qd - g) with the closed form; False if M is not PD."""
+    coriolis_into(th, q, qd, work33)
+    for i in range(3):
+        work3[i] = u[i] - (work33[i, 0] * qd[0] + work33[i, 1] * qd[1] + work33[i, 2] * qd[2])
+    # gravity (re-using work33 row storage is not safe; compute inline)
+    s2 = math.sin(q[1]); c2 = math.cos(q[1])
+    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
+    g3 = g0 * (th[6] * c23 + th[5] * s23) / l2
+    work3[1] -= g0 * (th[13] * c2 + th[14] * s2) + g3
+    work3[2] -= g3
+    mass_matrix_into(th, q, work33)
+    return solve_spd3(work33, work3, qdd)
+
+
+# ---- batch loops (leading axis N) -------------------------------------------------------
+
+
+@njit(**_JIT)
+def mass_matrix_batch(th, Q, out):
+    for n in range(Q.shape[0]):
+        mass_matrix_into(th, Q[n], out[n])
+
+
+@njit(**_JIT)
+def coriolis_batch(th, Q, QD, out):
+    for n in range(Q.shape[0]):
+        coriolis_into(th, Q[n], QD[n], out[n])
+
+
+@njit(**_JIT)
+def gravity_batch(th, Q, l2, g0, out):
+    for n in range(Q.shape[0]):
+        gravity_into(th, Q[n], l2, g0, out[n])
+
+
+@njit(**_JIT)
+def slotine_li_batch(Q, QD, V, A, l2, g0, out):
+    for n in range(Q.shape[0]):
+        slotine_li_into(Q[n], QD[n], V[n], A[n], l2, g0, out[n])
+
+
+@njit(**_JIT)
+def inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out):
+    """tau = Y(q, qd, qdd) theta for each state, without storing Y."""
+    Y = np.empty((3, 15))
+    for n in range(Q.shape[0]):
+        slotine_li_into(Q[n], QD[n], QD[n], QDD[n], l2, g0, Y)
+        for i in range(3):
+            acc = 0.0
+            for j in range(15):
+                acc += Y[i, j] * th[j]
+            out[n, i] = acc

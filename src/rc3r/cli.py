@@ -1,0 +1,147 @@
+"""Command line: ``rc3r <command> [options]``.
+
+``main(argv) -> int`` is the whole program (tested in-process); ``entry`` is the
+console script. User errors (:class:`~rc3r.errors.Rc3rError`, bad options) print
+one line ``rc3r: error: ...`` on stderr and return a non-zero code, never a
+traceback. Each command's work lives in its own module; this file only parses.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+
+from .errors import Rc3rError
+
+__all__ = ["main", "entry", "build_parser"]
+
+CONTROLLERS = ("fbl", "robust", "robust-coeff", "adaptive", "pd")
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line (no usage dump)."""
+
+    def error(self, message):  # noqa: D401 - argparse API
+        raise _UsageError(f"{self.prog}: {message}")
+
+
+class _UsageError(Exception):
+    pass
+
+
+def _positive(kind=float, allow_zero=False):
+    def conv(text):
+        try:
+            x = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if isinstance(x, float) and not math.isfinite(x):
+            raise argparse.ArgumentTypeError(f"must be finite, got {text}")
+        if x < 0 or (x == 0 and not allow_zero):
+            raise argparse.ArgumentTypeError(f"must be {'>= 0' if allow_zero else '> 0'}, got {text}")
+        return x
+
+    conv.__name__ = kind.__name__
+    return conv
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="rc3r", description=__doc__.splitlines()[0])
+    p.add_argument("--version", action="version", version=f"rc3r {__import__('rc3r').__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    v = sub.add_parser("verify-model", help="cross-check the closed-form model against Pinocchio")
+    v.add_argument("--urdf", help="URDF of a 3R arm of the paper's structure (default: urdf/rr3.urdf)")
+    v.add_argument("--samples", type=_positive(int), default=1000, help="random states (default 1000)")
+    v.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="RNG seed (default 0)")
+    v.add_argument("--json", action="store_true", help="one JSON object on stdout")
+
+    u = sub.add_parser("make-urdf", help="write the URDF of a parameter file (TOML)")
+    u.add_argument("--params", help="parameter TOML (default: Table 1, rc3r/data/rr3.toml)")
+    u.add_argument("--out", default="urdf/rr3.urdf", help="output path (default urdf/rr3.urdf)")
+
+    b = sub.add_parser("bounds", help="theta_0 and rho from an uncertainty box")
+    b.add_argument("--box", help="box TOML (default: the paper's box)")
+    b.add_argument("--urdf", help="nominal robot URDF (default: urdf/rr3.urdf)")
+    b.add_argument("--json", action="store_true", help="one JSON object on stdout")
+
+    r = sub.add_parser("run", help="simulate one controller on one plant")
+    r.add_argument("--controller", choices=CONTROLLERS, default="robust")
+    r.add_argument("--perturbed", action="store_true",
+                   help="plant = Table 1 robot, controller uses theta_0 and rho (default: ideal)")
+    r.add_argument("--plant", help="plant: 'nominal', 'upper', a corner 'corner:<bits>', "
+                                  "'random:<seed>' or a URDF path")
+    r.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")
+    r.add_argument("--rate", type=_positive(), help="sampled-data controller at this rate [Hz] "
+                                                    "(default: continuous time)")
+    r.add_argument("--duration", type=_positive(), help="simulated time [s] (default 10)")
+    r.add_argument("--config", help="TOML with gains, trajectory, plant, bounds (docs/control.md)")
+    r.add_argument("--engine", choices=("fast", "reference"), help="integrator (default fast)")
+    r.add_argument("--out", default="out/run", help="output directory (default out/run)")
+
+    pa = sub.add_parser("paper", help="the five scenarios of section 4, figures and summary")
+    pa.add_argument("--out", default="out/paper", help="output directory (default out/paper)")
+
+    s = sub.add_parser("sweep-eps", help="error bound vs chattering over a range of eps")
+    s.add_argument("--out", default="out/sweep-eps", help="output directory")
+    s.add_argument("--eps", type=_positive(), nargs="+", help="eps values (default 10 log-spaced)")
+    s.add_argument("--duration", type=_positive(), help="simulated time [s] (default 10)")
+
+    be = sub.add_parser("bench", help="closed form vs Pinocchio and simulation timings")
+    be.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    be.add_argument("--quick", action="store_true", help="tiny sizes (CI: correctness only)")
+    return p
+
+
+def _dispatch(args) -> int:
+    cmd = args.command
+    if cmd == "verify-model":
+        from .verify import cmd_verify_model
+        return cmd_verify_model(args)
+    if cmd == "make-urdf":
+        from .urdf import cmd_make_urdf
+        return cmd_make_urdf(args)
+    if cmd == "bounds":
+        from .uncertainty import cmd_bounds
+        return cmd_bounds(args)
+    if cmd == "run":
+        from .scenarios import cmd_run
+        return cmd_run(args)
+    if cmd == "paper":
+        from .scenarios import cmd_paper
+        return cmd_paper(args)
+    if cmd == "sweep-eps":
+        from .scenarios import cmd_sweep_eps
+        return cmd_sweep_eps(args)
+    if cmd == "bench":
+        from .bench import cmd_bench
+        return cmd_bench(args)
+    raise AssertionError(cmd)  # argparse restricts the choices
+
+
+def main(argv=None) -> int:
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); return the exit code."""
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    try:
+        args = build_parser().parse_args(argv)
+        return int(_dispatch(args) or 0)
+    except _UsageError as exc:
+        print(f"rc3r: error: {exc}", file=sys.stderr)
+        return 2
+    except Rc3rError as exc:
+        print(f"rc3r: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("rc3r: interrupted (files already written are complete)", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug: still one line, with a way to get the traceback
+        if os.environ.get("RC3R_DEBUG"):
+            raise
+        print(f"rc3r: internal error: {type(exc).__name__}: {exc} (set RC3R_DEBUG=1 for a traceback)",
+              file=sys.stderr)
+        return 1
+
+
+def entry() -> None:  # console script
+    sys.exit(main())
