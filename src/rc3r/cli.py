@@ -23,7 +23,7 @@ class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line (no usage dump)."""
 
     def error(self, message):  # noqa: D401 - argparse API
-        raise _UsageError(f"{self.prog}: {message}")
+        raise _UsageError(f"{message} (see `{self.prog} --help`)")
 
 
 class _UsageError(Exception):

@@ -1,0 +1,33 @@
+"""Shared fixtures: a seeded RNG and the Table 1 arm loaded from the committed URDF."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+#: One seed for the whole suite; change it to re-roll every random test.
+SEED = 20241122
+
+
+@pytest.fixture
+def rng():
+    """A fresh, seeded numpy Generator per test (reproducible, order-independent)."""
+    return np.random.default_rng(SEED)
+
+
+@pytest.fixture(scope="session")
+def arm():
+    """The committed ``urdf/rr3.urdf`` loaded and checked (params + Pinocchio model)."""
+    from rc3r.urdf import REPO_URDF, load_arm
+
+    return load_arm(REPO_URDF)
+
+
+@pytest.fixture(scope="session")
+def table1():
+    from rc3r.params import table1
+
+    return table1()
