@@ -343,3 +343,12 @@ def cmd_make_urdf(args) -> int:
     out = write_urdf(p, args.out)
     print(f"wrote {out}")
     return 0
+
+
+def model_from_params(p: ArmParams):
+    """Pinocchio model of the arm ``p`` (through :func:`make_urdf`), gravity ``(0, 0, -g0)``."""
+    import pinocchio as pin
+
+    model = pin.buildModelFromXML(make_urdf(p))
+    model.gravity.linear = np.array([0.0, 0.0, -float(p.g0)])
+    return model

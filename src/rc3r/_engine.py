@@ -1,0 +1,290 @@
+"""Compiled closed-loop simulation (numba): closed-form plant + controller + integrator.
+
+State ``x = (q, qd, z)``: joint positions [rad], velocities [rad/s] and the
+controller state ``z`` (the adaptive law's theta estimate; empty otherwise).
+
+* :func:`integrate_continuous` -- the controller inside the integrator (continuous
+  time). The robust law's boundary layer makes the loop stiff (gain ``rho/eps Y Y^T``
+  ~ 1e6), so the integrator is the L-stable Rosenbrock pair of Shampine & Reichelt,
+  "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18 (1997) (MATLAB's ode23s): order 2
+  step, order 3 error estimate, Jacobian by forward differences every step.
+  Steps are clipped to hit every output time exactly.
+* :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and
+  held (zero-order hold); the plant is integrated over each period by classical RK4
+  with ``nsub`` sub-steps; the controller state is updated by forward Euler.
+
+Status codes: 0 ok, 1 non-finite state, 2 |q| bound, 3 |qd| bound, 4 |u| bound,
+5 mass matrix not positive definite, 6 step size underflow.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from . import _kernels as K
+from .controllers import control_into
+from .trajectory import reference_into
+
+_JIT = dict(cache=True, nogil=True)
+
+OK, NONFINITE, QBOUND, QDBOUND, UBOUND, NOTPD, HMIN = 0, 1, 2, 3, 4, 5, 6
+STATUS_TEXT = {
+    OK: "ok",
+    NONFINITE: "state became NaN or infinite",
+    QBOUND: "|q| exceeded its bound",
+    QDBOUND: "|qd| exceeded its bound",
+    UBOUND: "|u| exceeded its bound",
+    NOTPD: "plant mass matrix not positive definite",
+    HMIN: "integrator step size underflow",
+}
+
+
+@njit(**_JIT)
+def closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3):
+    """xdot = f(t, x); fills ``u``. Returns False if the plant M is not PD."""
+    reference_into(tp, t, ref)
+    control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, xdot[6:], Y, xi)
+    for i in range(3):
+        xdot[i] = x[3 + i]
+    return K.forward_dynamics_into(thp, x[0:3], x[3:6], u, l2, g0, xdot[3:6], w33, w3)
+
+
+@njit(**_JIT)
+def _check(x, u, lim):
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            return NONFINITE
+    for i in range(3):
+        if abs(x[i]) > lim[0]:
+            return QBOUND
+        if abs(x[3 + i]) > lim[1]:
+            return QDBOUND
+        if not math.isfinite(u[i]):
+            return NONFINITE
+        if abs(u[i]) > lim[2]:
+            return UBOUND
+    return OK
+
+
+@njit(**_JIT)
+def _lu_factor(A, piv):
+    """In-place LU with partial pivoting (small dense n x n)."""
+    n = A.shape[0]
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                p = i
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        if A[k, k] == 0.0:
+            return False
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            A[i, k] *= inv
+            f = A[i, k]
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    return True
+
+
+@njit(**_JIT)
+def _lu_solve(LU, piv, b):
+    n = LU.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(n):
+        acc = b[i]
+        for j in range(i):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc / LU[i, i]
+
+
+@njit(**_JIT)
+def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hmax, lim,
+                         X, U, R, ynorm):
+    """Integrate from ``t_out[0]``; store x, u, q_d rows at every ``t_out``.
+
+    Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
+    ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
+    """
+    n = x0.shape[0]
+    d = 1.0 / (2.0 + math.sqrt(2.0))
+    e32 = 6.0 + math.sqrt(2.0)
+    x = x0.copy()
+    xnew = np.empty(n)
+    F0 = np.empty(n); F1 = np.empty(n); F2 = np.empty(n); Ft = np.empty(n); Fp = np.empty(n)
+    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); tmp = np.empty(n)
+    J = np.empty((n, n)); W = np.empty((n, n)); piv = np.zeros(n, dtype=np.int64)
+    u = np.empty(3); ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
+    w33 = np.empty((3, 3)); w3 = np.empty(3)
+    nrhs = 0; nsteps = 0; nrej = 0
+    t = t_out[0]
+    ok = closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, F0, u, ref, Y, xi, w33, w3)
+    nrhs += 1
+    X[0] = x; U[0] = u; R[0] = ref[0]
+    ynorm[0] = control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi)
+    if not ok:
+        return NOTPD, 1, nrhs, nsteps, nrej, t
+    st = _check(x, u, lim)
+    if st != OK:
+        return st, 1, nrhs, nsteps, nrej, t
+    h = h0
+    sqeps = math.sqrt(2.220446049250313e-16)
+    for k in range(1, t_out.shape[0]):
+        t_next = t_out[k]
+        while t < t_next:
+            h = min(h, hmax)
+            last = False
+            if t + h >= t_next - 1e-12 * max(1.0, abs(t_next)):
+                h = t_next - t
+                last = True
+            # Jacobian by forward differences (F0 = f(t, x) is current)
+            for j in range(n):
+                dx = sqeps * max(abs(x[j]), 1e-3)
+                xj = x[j]
+                x[j] = xj + dx
+                closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3)
+                x[j] = xj
+                for i in range(n):
+                    J[i, j] = (Fp[i] - F0[i]) / dx
+            dt = sqeps * max(abs(t), 1.0)
+            closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3)
+            for i in range(n):
+                Ft[i] = (Fp[i] - F0[i]) / dt
+            nrhs += n + 1
+            while True:
+                hd = h * d
+                for i in range(n):
+                    for j in range(n):
+                        W[i, j] = -hd * J[i, j]
+                    W[i, i] += 1.0
+                if not _lu_factor(W, piv):
+                    return HMIN, k, nrhs, nsteps, nrej, t
+                for i in range(n):
+                    k1[i] = F0[i] + hd * Ft[i]
+                _lu_solve(W, piv, k1)
+                for i in range(n):
+                    tmp[i] = x[i] + 0.5 * h * k1[i]
+                ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3)
+                for i in range(n):
+                    k2[i] = F1[i] - k1[i]
+                _lu_solve(W, piv, k2)
+                for i in range(n):
+                    k2[i] += k1[i]
+                    xnew[i] = x[i] + h * k2[i]
+                ok2 = closed_loop_rhs(t + h, xnew, thp, law, cp, tp, l2, g0, F2, u, ref, Y, xi, w33, w3)
+                nrhs += 2
+                for i in range(n):
+                    k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
+                _lu_solve(W, piv, k3)
+                err = 0.0
+                for i in range(n):
+                    sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
+                    ei = abs(h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i])) / sc
+                    if not (ei <= err):  # also catches NaN
+                        err = ei if math.isfinite(ei) else 1e300
+                if ok1 and ok2 and err <= 1.0:
+                    break
+                nrej += 1
+                last = False
+                h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / 3.0)) if err < 1e300 else 0.1 * h
+                if h < 1e-14 * max(1.0, abs(t)):
+                    return HMIN, k, nrhs, nsteps, nrej, t
+            nsteps += 1
+            t = t_next if last else t + h
+            for i in range(n):
+                x[i] = xnew[i]
+                F0[i] = F2[i]
+            st = _check(x, u, lim)
+            if st != OK:
+                return st, k, nrhs, nsteps, nrej, t
+            fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / 3.0)))
+            h = h * fac
+        X[k] = x
+        reference_into(tp, t, ref)
+        ynorm[k] = control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi)
+        U[k] = u
+        R[k] = ref[0]
+    return OK, t_out.shape[0], nrhs, nsteps, nrej, t
+
+
+@njit(**_JIT)
+def _plant_rhs(x, u, thp, l2, g0, xdot, w33, w3):
+    for i in range(3):
+        xdot[i] = x[3 + i]
+    return K.forward_dynamics_into(thp, x[0:3], x[3:6], u, l2, g0, xdot[3:6], w33, w3)
+
+
+@njit(**_JIT)
+def integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0, lim,
+                      X, U, R, ynorm, tv):
+    """Zero-order-hold loop: ``nsamples`` periods of ``Ts``; store every ``dec``-th sample.
+
+    ``tv`` (3,) accumulates the total variation of u over all samples.
+    Returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``.
+    """
+    n = x0.shape[0]
+    x = x0.copy()
+    zdot = np.zeros(max(n - 6, 0))
+    u = np.empty(3); uprev = np.empty(3)
+    ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
+    w33 = np.empty((3, 3)); w3 = np.empty(3)
+    k1 = np.empty(6); k2 = np.empty(6); k3 = np.empty(6); k4 = np.empty(6); xs = np.empty(6)
+    h = Ts / nsub
+    nrhs = 0
+    stored = 0
+    for s in range(nsamples + 1):
+        t = t0 + s * Ts
+        reference_into(tp, t, ref)
+        yn = control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, zdot, Y, xi)
+        if s > 0:
+            for i in range(3):
+                tv[i] += abs(u[i] - uprev[i])
+        for i in range(3):
+            uprev[i] = u[i]
+        st = _check(x, u, lim)
+        if s % dec == 0 or st != OK:
+            X[stored] = x; U[stored] = u; R[stored] = ref[0]; ynorm[stored] = yn
+            stored += 1
+        if st != OK:
+            return st, stored, nrhs, s, t
+        if s == nsamples:
+            break
+        for sub in range(nsub):
+            ok = _plant_rhs(x, u, thp, l2, g0, k1, w33, w3)
+            for i in range(6):
+                xs[i] = x[i] + 0.5 * h * k1[i]
+            ok &= _plant_rhs(xs, u, thp, l2, g0, k2, w33, w3)
+            for i in range(6):
+                xs[i] = x[i] + 0.5 * h * k2[i]
+            ok &= _plant_rhs(xs, u, thp, l2, g0, k3, w33, w3)
+            for i in range(6):
+                xs[i] = x[i] + h * k3[i]
+            ok &= _plant_rhs(xs, u, thp, l2, g0, k4, w33, w3)
+            nrhs += 4
+            if not ok:
+                return NOTPD, stored, nrhs, s, t
+            for i in range(6):
+                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        for i in range(n - 6):  # controller state: forward Euler, as a digital controller
+            x[6 + i] += Ts * zdot[i]
+    return OK, stored, nrhs, nsamples, t0 + nsamples * Ts
