@@ -60,7 +60,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError, ParameterError
-from .params import INERTIA_KEYS, STD_NAMES, ArmParams, theta, theta_from_vector
+from .params import INERTIA_KEYS, STD_NAMES, ArmParams, require_simulable, theta, theta_from_vector
 
 __all__ = [
     "PARAM_NAMES",
@@ -75,6 +75,7 @@ __all__ = [
     "paper_bounds",
     "certified_bounds",
     "quadratic_box_extrema",
+    "certified_radius",
     "sampled_rho",
     "sampled_rho_detail",
     "perturb",
@@ -357,11 +358,19 @@ def paper_upper(p: ArmParams, box: Box, inertia_keys=PAPER_INERTIA_KEYS) -> ArmP
     return _shifted(p, delta)
 
 
+def _unsimulable(p: ArmParams) -> bool:
+    try:
+        require_simulable(p)
+    except ParameterError:
+        return True
+    return False
+
+
 def _shifted(p: ArmParams, delta) -> ArmParams:
     return ArmParams.from_vector(p.to_vector() + np.asarray(delta, dtype=float), p.lengths, p.g0, name=p.name)
 
 
-def perturb(p: ArmParams, box: Box, spec: str) -> ArmParams:
+def perturb(p: ArmParams, box: Box, spec: str, *, simulable: bool = False) -> ArmParams:
     """A parameter set of the box, for plants of simulations.
 
     ``spec`` is one of
@@ -373,17 +382,33 @@ def perturb(p: ArmParams, box: Box, spec: str) -> ArmParams:
       :data:`PARAM_NAMES` order (``_`` separators allowed);
     * ``"random:<seed>"`` -- uniform in the box, ``numpy.random.default_rng(seed)``.
 
-    The result is not checked for physical consistency beyond mass > 0 (a corner
-    of the paper's box can have a non-positive-definite inertia); see
-    :func:`rc3r.params.physical_issues`.
+    By default the result is only checked for mass > 0: most random draws and many
+    corners of the paper's box have a non-positive-definite inertia (e.g.
+    ``Ixx2 = 0.5``, ``Ixy2 = 1.2``), see :func:`rc3r.params.physical_issues`.
+    With ``simulable=True`` the result must pass
+    :func:`rc3r.params.require_simulable` (mass > 0, inertia positive definite;
+    the triangle inequality is not required, as for Table 1): ``random:<seed>``
+    then redraws from the same generator until it does (uniform on the
+    simulable part of the box, at most 10000 draws), other specs raise.
 
     Raises
     ------
     ConfigError
         Unknown or malformed ``spec``.
     ParameterError
-        The box allows a mass <= 0 for ``p``.
+        The box allows a mass <= 0 for ``p``; with ``simulable=True``, a result
+        that cannot be simulated.
     """
+    out = _perturb(p, box, spec, simulable)
+    if simulable:
+        try:
+            require_simulable(out)
+        except ParameterError as exc:
+            raise ParameterError(f"perturbation {spec!r} is not simulable: {exc}") from None
+    return out
+
+
+def _perturb(p: ArmParams, box: Box, spec, simulable: bool) -> ArmParams:
     if not isinstance(spec, str):
         raise ConfigError(f"perturbation spec must be a string, got {spec!r}")
     s = spec.strip()
@@ -413,7 +438,12 @@ def perturb(p: ArmParams, box: Box, spec: str) -> ArmParams:
                 raise ValueError
         except ValueError:
             raise ConfigError(f"bad perturbation {spec!r}: 'random:' needs a seed >= 0, e.g. random:0") from None
-        return _shifted(p, box.sample(np.random.default_rng(seed), 1)[0])
+        rng = np.random.default_rng(seed)
+        for _ in range(10_000 if simulable else 1):
+            out = _shifted(p, box.sample(rng, 1)[0])
+            if not simulable or not _unsimulable(out):
+                return out
+        raise ParameterError(f"perturbation {spec!r}: no simulable robot in 10000 draws from the box")
     raise ConfigError(
         f"bad perturbation {spec!r}: expected nominal, upper, lower, paper-upper, corner:<30 bits> or random:<seed>"
     )
@@ -707,6 +737,25 @@ def certified_bounds(p: ArmParams, box: Box | None = None) -> Bounds:
     )
 
 
+def certified_radius(cert: Bounds, theta0) -> tuple[float, np.ndarray]:
+    """Certified radius around any ``theta0`` from the exact ranges of method (b).
+
+    ``rho_i = max(theta0_i - lo_i, hi_i - theta0_i)`` (attained, eq. 7) and
+    ``rho = sqrt(sum rho_i^2) >= ||theta - theta0||`` over the box. For the
+    centre (``cert.theta0``) this is ``(cert.rho, cert.rho_i)``, the smallest such
+    per-coefficient radii; for the paper's Table 3 it says how large ``rho`` must
+    be for the paper's ``theta_0`` to cover the whole box.
+    """
+    if cert.theta_lo is None or cert.theta_hi is None:
+        raise ParameterError("certified_radius needs the exact ranges of certified_bounds (method (b))")
+    t0 = np.asarray(theta0, dtype=float)
+    if t0.shape != (15,) or not np.all(np.isfinite(t0)):
+        raise ParameterError(f"theta0 needs 15 finite entries, got {t0.tolist()}")
+    rho_i = np.maximum(t0 - cert.theta_lo, cert.theta_hi - t0)
+    rho_i = np.maximum(rho_i, 0.0)
+    return float(np.sqrt(np.sum(rho_i**2))), rho_i
+
+
 # ----------------------------------------------------------- sampled lower bound
 
 
@@ -868,6 +917,7 @@ def cmd_bounds(args) -> int:
     b = certified_bounds(p, box)
     s_b = sampled_rho_detail(p, box, b.theta0, n=CLI_SAMPLES, seed=CLI_SEED)
     s_a = sampled_rho_detail(p, box, a.theta0, n=CLI_SAMPLES, seed=CLI_SEED)
+    rho_a_box, rho_a_i = certified_radius(b, a.theta0)
     if getattr(args, "json", False):
         out = {
             "nominal": {"urdf": loaded.path, "theta": _floats(theta(p))},
@@ -876,6 +926,7 @@ def cmd_bounds(args) -> int:
             "certified": b.to_dict(),
             "sampled_certified": s_b.to_dict(),
             "sampled_paper": s_a.to_dict(),
+            "paper_theta0_certified": {"rho": rho_a_box, "rho_i": _floats(rho_a_i)},
         }
         for key in ("paper", "certified"):
             out[key].pop("box")
@@ -892,8 +943,9 @@ def cmd_bounds(args) -> int:
     keys = ", ".join(k.capitalize() for k in a.inertia_keys)
     print(f"(a) paper:     theta0 = (theta(p) + theta(p_up))/2, inertia deltas on {keys} only")
     print(f"               rho = ||theta0 - theta(p)|| = {a.rho:.4f}   (covers the nominal robot only)")
-    print(f"               max over box of ||theta - theta0(a)|| >= {s_a.rho:.4f}   (sampled)")
-    print(f"(b) certified: theta0 = centre of the exact ranges, |theta_i - theta0_i| <= rho_i (attained)")
+    print(f"               over the box: {s_a.rho:.4f} <= max ||theta - theta0(a)|| <= {rho_a_box:.4f}"
+          f"   (sampled; certified from (b)'s ranges)")
+    print("(b) certified: theta0 = centre of the exact ranges, |theta_i - theta0_i| <= rho_i (attained)")
     print(f"               rho_max = sqrt(sum rho_i^2) = {b.rho:.4f}   (>= ||theta - theta0|| on the whole box)")
     corners = f"all {s_b.n_corners} relevant corners" if s_b.all_corners else f"{s_b.n_corners} random corners"
     print(f"               max over box of ||theta - theta0(b)|| >= {s_b.rho:.4f}   (sampled lower bound: "
