@@ -70,8 +70,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--controller", choices=CONTROLLERS, default="robust")
     r.add_argument("--perturbed", action="store_true",
                    help="plant = Table 1 robot, controller uses theta_0 and rho (default: ideal)")
-    r.add_argument("--plant", help="plant: 'nominal', 'upper', a corner 'corner:<bits>', "
-                                  "'random:<seed>' or a URDF path")
+    r.add_argument("--plant", help="plant: nominal (Table 1), upper, lower, paper-upper, "
+                                  "corner:<30 bits>, random:<seed>, or a URDF path")
     r.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")
     r.add_argument("--rate", type=_positive(), help="sampled-data controller at this rate [Hz] "
                                                     "(default: continuous time)")
