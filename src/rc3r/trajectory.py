@@ -51,13 +51,13 @@ def reference_into(tp, t, ref):
     else:  # quintic: [1, nseg, durations(nseg), waypoints((nseg+1) x 3)]
         nseg = int(tp[1])
         t0 = 0.0
-        seg = nseg - 1
+        seg = -1
         for k in range(nseg):
             if t < t0 + tp[2 + k]:
                 seg = k
                 break
             t0 += tp[2 + k]
-        if t >= t0 + tp[2 + seg]:  # past the end: hold the last waypoint
+        if seg < 0:  # past the end: hold the last waypoint
             wp = 2 + nseg + 3 * nseg
             for i in range(3):
                 ref[0, i] = tp[wp + i]

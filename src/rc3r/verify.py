@@ -16,7 +16,7 @@ Error measure (defined once, here and in ``docs/conventions.md``): for a value
     e_{abs} = \max |x - r|, \qquad e_{rel} = e_{abs} / \max(1, \max |r|)
 
 i.e. relative to the largest reference magnitude, but never to less than one
-unit (so a reference that is zero everywhere, like the first row of ``g``, is
+unit (so a reference that is zero everywhere, like the first entry of ``g``, is
 compared absolutely). A check passes iff :math:`e_{rel} \le` :data:`TOL`.
 """
 from __future__ import annotations
@@ -40,6 +40,9 @@ __all__ = [
     "VerifyReport",
     "sample_states",
     "compare",
+    "mass_matrix_derivative",
+    "pinocchio_references",
+    "check_minimality",
     "verify_model",
     "render_text",
     "report_to_dict",
@@ -56,16 +59,18 @@ __all__ = [
 TOL = 1e-9
 
 #: Relative singular-value threshold for numerical rank (``s_k > RANK_RTOL * s_1``).
-#: The stacked regressors have their 15th singular value near 1e-2 s_1 and the
-#: 16th at rounding level (~1e-15 s_1), so any threshold in between gives the
-#: same rank; 1e-9 sits in the middle of that gap (logarithmically).
+#: The stacked regressors have their 15th singular value near 1e-1 s_1 (measured
+#: 0.07..0.12 on Table 1 and other arms) and the 16th at rounding level
+#: (~1e-16 s_1), so any threshold in between gives the same rank; 1e-9 sits
+#: far from both ends of that gap.
 RANK_RTOL = 1e-9
 
-#: At most this many states are stacked for the rank/column-space test
-#: (a (3 * 200) x 30 matrix is far more than needed for rank 15 and cheap to SVD).
+#: The identification checks (``theta_least_squares``, ``minimality``) stack at
+#: least this many states whatever ``samples`` is: fewer than 5 states cannot
+#: determine 15 coefficients, and (3 * 200) x 30 is ample and cheap to SVD.
 MINIMALITY_STATES = 200
 
-#: Number of coefficients theta and of standard parameters (Pinocchio regressor columns).
+#: Number of coefficients theta (columns of Y).
 N_THETA = 15
 
 
@@ -228,6 +233,15 @@ def pinocchio_references(model, states: dict[str, np.ndarray]) -> dict[str, np.n
     return out
 
 
+def _rnea(model, states: dict[str, np.ndarray]) -> np.ndarray:
+    """``pinocchio.rnea(q, qd, qdd)`` at each state, shape (N, 3)."""
+    import pinocchio as pin
+
+    data = model.createData()
+    return np.array([pin.rnea(model, data, q, qd, qdd)
+                     for q, qd, qdd in zip(states["q"], states["qd"], states["qdd"])])
+
+
 # ---- the checks -------------------------------------------------------------------------
 
 
@@ -257,16 +271,18 @@ def check_minimality(model, Y_stacked: np.ndarray, states: dict[str, np.ndarray]
     r"""Theta is a *minimal* parametrization: span(Y) == span(Pinocchio regressor).
 
     Stacks ``pinocchio.computeJointTorqueRegressor`` (3 x 30 per state, the 10
-    standard parameters of each body) over the first :data:`MINIMALITY_STATES`
-    states. Since theta is linear in Pinocchio's parameters, span(Y_pin) is a
-    subspace of span(Y); the check requires both numerical ranks to be 15
+    standard parameters of each body) over the n states of ``Y_stacked``
+    (:func:`verify_model` uses :data:`MINIMALITY_STATES` states). Since theta is
+    linear in Pinocchio's parameters, span(Y_pin) is a subspace of span(Y); the check requires both numerical ranks to be 15
     (:data:`RANK_RTOL`) and the relative residual of projecting each column of
     one matrix onto the column space of the other to be <= ``tol``.
 
     Parameters
     ----------
     Y_stacked : ndarray, shape (3 n, 15)
-        The closed-form regressor at the same first n states.
+        The closed-form regressor at the first n states of ``states``.
+    states : dict
+        As returned by :func:`sample_states` (``q``, ``qd``, ``qdd`` used).
     """
     import pinocchio as pin
 
@@ -278,7 +294,7 @@ def check_minimality(model, Y_stacked: np.ndarray, states: dict[str, np.ndarray]
         for i in range(n)
     ])
     Bp, rank_p, sp = _orthonormal_basis(Yp, RANK_RTOL)
-    By, rank_y, sy = _orthonormal_basis(Y_stacked, RANK_RTOL)
+    By, rank_y, _ = _orthonormal_basis(Y_stacked, RANK_RTOL)
     a1, r1 = _projection_residual(Yp, By)
     a2, r2 = _projection_residual(Y_stacked, Bp)
     gap = sp[N_THETA] / sp[0] if sp.size > N_THETA else 0.0
@@ -316,7 +332,12 @@ def verify_model(urdf_path=None, samples: int = 1000, seed: int = 0) -> VerifyRe
         ``Ysl_theta_vs_pinocchio`` Y(q, qd, v, a) theta (3,) == M a + C v + g (Pinocchio)
         ``skew_symmetry``        S + S^T (3,3) == dM/dt (:func:`mass_matrix_derivative`)
         ``theta_least_squares``  lstsq of stacked Y (3N,15) against stacked rnea == theta (15,)
-        ``minimality``           :func:`check_minimality`
+        ``minimality``           :func:`check_minimality` on the first
+                                 :data:`MINIMALITY_STATES` states
+
+        The two identification checks use the same states as the others if
+        ``samples >= MINIMALITY_STATES``, else :data:`MINIMALITY_STATES` states
+        drawn with the same seed (15 coefficients need at least 5 states).
 
     Raises
     ------
@@ -336,7 +357,13 @@ def verify_model(urdf_path=None, samples: int = 1000, seed: int = 0) -> VerifyRe
     Y = reg.regressor(Q, QD, QDD, l2=l2, g0=g0)
     Ysl = reg.slotine_li_regressor(Q, QD, V, A, l2=l2, g0=g0)
     Y_stacked = Y.reshape(-1, N_THETA)
-    theta_hat = np.linalg.lstsq(Y_stacked, ref["tau"].reshape(-1), rcond=None)[0]
+    if samples >= MINIMALITY_STATES:
+        st_id, Y_id, tau_id = st, Y_stacked, ref["tau"]
+    else:  # too few states to identify 15 coefficients: use MINIMALITY_STATES of the same seed
+        st_id = sample_states(MINIMALITY_STATES, seed)
+        Y_id = reg.regressor(st_id["q"], st_id["qd"], st_id["qdd"], l2=l2, g0=g0).reshape(-1, N_THETA)
+        tau_id = _rnea(arm.model, st_id)
+    theta_hat = np.linalg.lstsq(Y_id, tau_id.reshape(-1), rcond=None)[0]
 
     checks = {
         "M_vs_crba": compare(M, ref["M"]),
@@ -347,7 +374,7 @@ def verify_model(urdf_path=None, samples: int = 1000, seed: int = 0) -> VerifyRe
         "Ysl_theta_vs_pinocchio": compare(Ysl @ th, ref["tau_sl"]),
         "skew_symmetry": compare(S + np.swapaxes(S, 1, 2), ref["Mdot"]),
         "theta_least_squares": compare(theta_hat, th),
-        "minimality": check_minimality(arm.model, Y_stacked[: 3 * MINIMALITY_STATES], st),
+        "minimality": check_minimality(arm.model, Y_id[: 3 * MINIMALITY_STATES], st_id),
     }
     return VerifyReport(
         urdf=arm.path,

@@ -1,0 +1,199 @@
+"""rc3r.verify / `rc3r verify-model`: passes on correct models, fails on wrong ones, output formats."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import rc3r.verify as verify
+from rc3r.cli import main
+from rc3r.params import ArmParams, LinkParams, theta, theta_from_vector
+from rc3r.urdf import REPO_URDF, load_arm, write_urdf
+
+CHECKS = {
+    "M_vs_crba", "S_vs_coriolis_matrix", "Sqd_vs_rnea", "g_vs_gravity", "Y_theta_vs_rnea",
+    "Ysl_theta_vs_pinocchio", "skew_symmetry", "theta_least_squares", "minimality",
+}
+
+#: Measured errors are ~1e-15 relative (rounding); 1e-9 is the documented pass
+#: threshold (verify.TOL), asserted here explicitly so a looser TOL is caught.
+MAX_REL = 1e-9
+
+
+def _other_arms():
+    """Two physically consistent arms unlike Table 1 (other lengths, masses, CoMs, inertias)."""
+    a = ArmParams((
+        LinkParams(0.4, 3.0, (0.05, -0.2, 0.01), (0.2, 0.25, 0.3, 0.01, -0.02, 0.03)),
+        LinkParams(1.7, 8.0, (-0.8, 0.1, -0.05), (0.1, 0.9, 0.85, 0.02, 0.0, -0.01)),
+        LinkParams(0.9, 1.5, (-0.3, 0.05, 0.2), (0.05, 0.2, 0.22, -0.01, 0.01, 0.0)),
+    ), name="other_a")
+    b = ArmParams((
+        LinkParams(1.2, 15.0, (0.0, 0.3, 0.0), (1.0, 1.0, 1.0, 0.0, 0.0, 0.0)),
+        LinkParams(0.3, 0.5, (-0.1, -0.1, 0.1), (0.01, 0.012, 0.015, 0.001, 0.002, 0.0)),
+        LinkParams(2.0, 19.0, (-1.0, 0.4, -0.6), (2.0, 3.0, 4.0, 0.5, -0.3, 0.2)),
+    ), name="other_b")
+    return a, b
+
+
+@pytest.fixture(scope="module")
+def table1_report():
+    return verify.verify_model(REPO_URDF)
+
+
+def test_committed_urdf_passes_every_check(table1_report):
+    """verify_model(urdf/rr3.urdf) (1000 states): every check passes with rel err <= 1e-9."""
+    r = table1_report
+    assert set(r.checks) == CHECKS
+    for name, c in r.checks.items():
+        assert c.passed, name
+        assert c.max_rel_err <= MAX_REL, (name, c.max_rel_err)
+    assert r.passed
+    np.testing.assert_allclose(r.theta, (33, -11.6, 3.4, -14, -4.4, -2, 12, 1.4, -3.8, -0.2, -2.2,
+                                         29.2, 15.3, 15, 3), atol=1e-12)
+
+
+def test_committed_urdf_warns_about_links_2_and_3(table1_report):
+    """Table 1 inertias of links 2, 3 violate the triangle inequality: two warnings, run still passes."""
+    w = table1_report.warnings
+    assert len(w) == 2
+    assert w[0].startswith("link 2") and "triangle" in w[0]
+    assert w[1].startswith("link 3") and "triangle" in w[1]
+    assert table1_report.passed
+
+
+@pytest.mark.parametrize("which", [0, 1])
+def test_generated_robots_pass(tmp_path, which):
+    """Any URDF of this structure passes: two generated arms (write_urdf) with other parameters."""
+    p = _other_arms()[which]
+    path = write_urdf(p, tmp_path / f"{p.name}.urdf")
+    r = verify.verify_model(path, samples=200, seed=3)
+    assert r.passed, {n: c for n, c in r.checks.items() if not c.passed}
+    assert all(c.max_rel_err <= MAX_REL for c in r.checks.values())
+    assert r.warnings == ()  # physically consistent
+    np.testing.assert_allclose(r.theta, theta(p), rtol=0, atol=1e-12)
+
+
+def test_json_output_parses_with_required_keys(capsys):
+    """`rc3r verify-model --json --samples 50`: one JSON object, required keys, exit 0."""
+    assert main(["verify-model", "--json", "--samples", "50"]) == 0
+    out, err = capsys.readouterr()
+    obj = json.loads(out)  # exactly one JSON document (json.loads rejects trailing data)
+    assert {"urdf", "theta", "checks", "warnings", "pass"} <= set(obj)
+    assert obj["pass"] is True and len(obj["theta"]) == 15 and len(obj["warnings"]) == 2
+    assert set(obj["checks"]) == CHECKS
+    for c in obj["checks"].values():
+        assert {"max_abs_err", "max_rel_err", "pass"} <= set(c)
+        assert c["pass"] is True
+    assert obj["samples"] == 50 and obj["seed"] == 0
+
+
+def test_text_output_table_and_exit_code(capsys):
+    """Human output: one table row per check with PASS, theta, warnings, final PASS line."""
+    assert main(["verify-model", "--samples", "20", "--seed", "4"]) == 0
+    out = capsys.readouterr().out
+    lines = out.splitlines()
+    for name in CHECKS:
+        row = next(line for line in lines if line.startswith(name + " "))
+        assert row.rstrip().endswith("PASS")
+    assert "th15" in out and "triangle inequality" in out
+    assert lines[-1].startswith("PASS")
+
+
+def test_same_seed_same_report():
+    """Reproducible: the same seed gives identical errors."""
+    a = verify.verify_model(REPO_URDF, samples=30, seed=7)
+    b = verify.verify_model(REPO_URDF, samples=30, seed=7)
+    assert a.checks == b.checks
+
+
+# ---- the checks can fail -------------------------------------------------------------------
+
+
+def test_compare_error_measure():
+    """rel = max|x - r| / max(1, max|r|): absolute below unit scale, relative above it."""
+    c = verify.compare([1.0, 2.0 + 1e-3], [1.0, 2.0])
+    assert c.max_abs_err == pytest.approx(1e-3) and c.max_rel_err == pytest.approx(5e-4)
+    assert not c.passed
+    small = verify.compare([1e-3], [0.0])
+    assert small.max_rel_err == pytest.approx(1e-3)
+    assert verify.compare([1e6 + 1e-4], [1e6]).passed  # 1e-10 relative
+    with pytest.raises(ValueError):
+        verify.compare(np.zeros(3), np.zeros(4))
+
+
+def test_compare_fails_on_nan():
+    c = verify.compare([np.nan], [0.0])
+    assert not c.passed
+
+
+def test_wrong_theta_fails_the_checks(monkeypatch, capsys):
+    """theta computed with a wrong l3 (1.1 instead of 1) makes the run FAIL and exit 1.
+
+    verify_model computes theta through ``rc3r.verify.theta_of``; patching it feeds
+    the closed form a theta of the wrong robot while Pinocchio uses the URDF.
+    """
+    def wrong_theta(p):
+        l1, l2, l3 = p.lengths
+        return theta_from_vector(p.to_vector(), (l1, l2, l3 + 0.1))
+
+    monkeypatch.setattr(verify, "theta_of", wrong_theta)
+    r = verify.verify_model(REPO_URDF, samples=50)
+    assert not r.passed
+    for name in ("M_vs_crba", "Y_theta_vs_rnea", "Ysl_theta_vs_pinocchio", "theta_least_squares",
+                 "g_vs_gravity", "skew_symmetry"):
+        assert not r.checks[name].passed, name
+        assert r.checks[name].max_rel_err > 1e-3
+    assert r.checks["minimality"].passed  # independent of theta
+    assert main(["verify-model", "--samples", "20"]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out.splitlines()[-1]
+
+
+def test_perturbed_theta_fails_comparison_with_rnea(arm, rng):
+    """Y theta' vs rnea fails for theta' = theta + 1e-6 in one entry (detects tiny errors)."""
+    import pinocchio as pin
+
+    th = theta(arm.params)
+    st = verify.sample_states(20, seed=1)
+    l2 = arm.params.lengths[1]
+    Y = verify.reg.regressor(st["q"], st["qd"], st["qdd"], l2=l2)
+    data = arm.model.createData()
+    ref = np.array([pin.rnea(arm.model, data, st["q"][n], st["qd"][n], st["qdd"][n]) for n in range(20)])
+    assert verify.compare(Y @ th, ref).passed
+    bad = th.copy()
+    bad[int(rng.integers(15))] += 1e-6
+    assert not verify.compare(Y @ bad, ref).passed
+
+
+def test_minimality_fails_for_rank_deficient_regressor(arm):
+    """Dropping one theta column (rank 14) fails the minimality check."""
+    st = verify.sample_states(50, seed=2)
+    Y = verify.reg.regressor(st["q"], st["qd"], st["qdd"], l2=arm.params.lengths[1]).reshape(-1, 15)
+    assert verify.check_minimality(arm.model, Y, st).passed
+    Yd = Y.copy()
+    Yd[:, 4] = 0.0
+    c = verify.check_minimality(arm.model, Yd, st)
+    assert not c.passed and "rank(Y) = 14" in c.detail
+
+
+def test_json_is_strict_even_with_nan():
+    """Non-finite errors are written as null, and the overall pass is false."""
+    bad = verify.Check(float("nan"), float("nan"), 1e-9, False)
+    rep = verify.VerifyReport(urdf="x", theta=(0.0,) * 15, checks={"M_vs_crba": bad}, passed=False)
+    text = json.dumps(verify.report_to_dict(rep), allow_nan=False)
+    obj = json.loads(text)
+    assert obj["checks"]["M_vs_crba"]["max_rel_err"] is None and obj["pass"] is False
+    assert "FAIL" in verify.render_text(rep).splitlines()[-1]
+
+
+def test_load_arm_default_is_committed_urdf():
+    """verify-model without --urdf uses urdf/rr3.urdf in a checkout."""
+    assert load_arm().path == str(REPO_URDF)
+
+
+def test_few_samples_still_identify_theta():
+    """--samples 1: the identification checks (lstsq, minimality) still stack 200 states and pass."""
+    r = verify.verify_model(REPO_URDF, samples=1)
+    assert r.passed
+    assert "200 states" in r.checks["minimality"].detail
