@@ -67,7 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
     r = sub.add_parser("run", help="simulate one controller on one plant")
-    r.add_argument("--controller", choices=CONTROLLERS, default="robust")
+    r.add_argument("--controller", choices=CONTROLLERS, help="control law (default: config file, else robust)")
     r.add_argument("--perturbed", action="store_true",
                    help="plant = Table 1 robot, controller uses theta_0 and rho (default: ideal)")
     r.add_argument("--plant", help="plant: nominal (Table 1), upper, lower, paper-upper, "
