@@ -31,3 +31,17 @@ def table1():
     from rc3r.params import table1
 
     return table1()
+
+
+@pytest.fixture(scope="session")
+def th(arm):
+    """theta (15,) of the committed URDF (Table 1)."""
+    from rc3r.params import theta
+
+    return theta(arm.params)
+
+
+@pytest.fixture(scope="session")
+def pdata(arm):
+    """A Pinocchio Data for the committed URDF's model."""
+    return arm.model.createData()

@@ -42,14 +42,6 @@ def pin_M(model, data, q):
 
 
 
-@pytest.fixture(scope="module")
-def th(arm):
-    return theta(arm.params)
-
-
-@pytest.fixture(scope="module")
-def pdata(arm):
-    return arm.model.createData()
 
 
 # ---- identities against Pinocchio --------------------------------------------------------

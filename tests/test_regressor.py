@@ -137,14 +137,6 @@ def test_hypothesis_examples_are_reproducible():
 # ---- Table 1 identities -----------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def th(arm):
-    return theta(arm.params)
-
-
-@pytest.fixture(scope="module")
-def pdata(arm):
-    return arm.model.createData()
 
 
 def test_Y_theta_equals_rnea(arm, th, pdata, rng):

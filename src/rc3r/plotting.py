@@ -36,19 +36,24 @@ def plot_run(res, path: str | Path, title: str) -> Path:
     return path
 
 
-def plot_error_comparison(runs: dict, path: str | Path, title: str) -> Path:
-    """max_j |e_j(t)| of several runs on a log scale."""
-    fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
-    for name, res in runs.items():
-        ax.semilogy(res.t, np.maximum(np.abs(res.e).max(axis=1), 1e-16), lw=0.9, label=name)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("max_j |e_j| [rad]")
+def _finish(fig, ax, path, title, xlabel, ylabel) -> Path:
+    """Label, grid, legend; save atomically; close."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     path = atomic_savefig(fig, path, dpi=110)
     plt.close(fig)
     return path
+
+
+def plot_error_comparison(runs: dict, path: str | Path, title: str) -> Path:
+    """max_j |e_j(t)| of several runs on a log scale."""
+    fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
+    for name, res in runs.items():
+        ax.semilogy(res.t, np.maximum(np.abs(res.e).max(axis=1), 1e-16), lw=0.9, label=name)
+    return _finish(fig, ax, path, title, "t [s]", "max_j |e_j| [rad]")
 
 
 def plot_tradeoff(rows: list[dict], path: str | Path, title: str) -> Path:
@@ -63,11 +68,6 @@ def plot_tradeoff(rows: list[dict], path: str | Path, title: str) -> Path:
         ax.loglog(x, y, "o-", label=mode)
         for r, xi, yi in zip(pts, x, y):
             ax.annotate(f"{r['eps']:.3g}", (xi, yi), fontsize=7, textcoords="offset points", xytext=(3, 3))
-    ax.set_xlabel("chattering: total variation of u per second, summed over joints [N m/s]")
-    ax.set_ylabel("final error bound max_j max_{t>T-1} |e_j| [rad]")
-    ax.set_title(title)
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    path = atomic_savefig(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return _finish(fig, ax, path, title,
+                   "chattering: total variation of u per second, summed over joints [N m/s]",
+                   "final error bound max_j max_{t>T-1} |e_j| [rad]")
