@@ -180,3 +180,13 @@ def test_cli_verify_model_bad_urdf_exit_2_one_line(tmp_path, table1, capsys, kin
     out, err = capsys.readouterr()
     assert out == ""
     assert len(err.splitlines()) == 1 and err.startswith("rc3r: error: ")
+
+
+@pytest.mark.parametrize("bad", ['<mass value="nan" />', '<mass value="inf" />', '<mass value="ten" />'])
+def test_non_finite_numbers_refused(tmp_path, bad):
+    """A NaN/inf/non-numeric mass is refused by rc3r (urdfdom would drop the inertial silently)."""
+    text = (Path(REPO_URDF).read_text()).replace('<mass value="10.0" />', bad, 1)
+    f = tmp_path / "bad.urdf"
+    f.write_text(text)
+    with pytest.raises(UrdfError, match="not a finite number"):
+        load_arm(f)

@@ -193,6 +193,7 @@ def _parse(path: Path) -> ET.Element:
         raise UrdfError(f"malformed URDF {path}: {exc}") from None
     if root.tag != "robot":
         raise UrdfError(f"malformed URDF {path}: root element is <{root.tag}>, not <robot>")
+    _check_numbers(root, path)
     # yourdfpy validates the URDF schema (links, joints, references) beyond XML syntax.
     import yourdfpy
 
@@ -206,6 +207,34 @@ def _parse(path: Path) -> ET.Element:
 
 
 _MOVING = {"revolute", "continuous", "prismatic", "floating", "planar"}
+
+
+#: Numeric attributes of a URDF that rc3r reads: (element tag, attributes).
+_NUMERIC = {
+    "origin": ("xyz", "rpy"),
+    "axis": ("xyz",),
+    "mass": ("value",),
+    "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
+}
+
+
+def _check_numbers(root: ET.Element, path: Path) -> None:
+    """Every number rc3r reads must parse and be finite (urdfdom would drop a NaN silently)."""
+    for parent in root.iter():
+        owner = parent.get("name")
+        for el in parent:
+            for attr in _NUMERIC.get(el.tag, ()):
+                text = el.get(attr)
+                if text is None:
+                    continue
+                try:
+                    ok = all(math.isfinite(float(x)) for x in text.split())
+                except ValueError:
+                    ok = False
+                if not ok:
+                    where = f"{parent.tag} '{owner}'" if owner else parent.tag
+                    raise UrdfError(f"malformed URDF {path}: {where} <{el.tag} {attr}=\"{text}\"> "
+                                    "is not a finite number")
 
 
 def _normalize(root: ET.Element, path: Path) -> str:
