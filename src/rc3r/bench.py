@@ -1,0 +1,650 @@
+r"""``rc3r bench``: closed form vs Pinocchio, simulation wall times, compile time, memory.
+
+Everything is measured side by side in one run, on one machine; nothing is read
+from files and nothing is written (except temporary directories of the
+subprocess measurements, removed afterwards).
+
+Operations (``ops``)
+    Per-state cost of the closed form (:mod:`rc3r.regressor`, :mod:`rc3r.model`,
+    the compiled kernels of :mod:`rc3r._kernels`) and of Pinocchio's ``rnea``,
+    ``aba``, ``crba`` looped from Python over the *same* random states.
+    Each is timed with :func:`time.perf_counter` after a warm-up call (numba
+    compilation or cache load), ``repeats`` times; ``median_s``/``min_s`` are per
+    state. ``ratio_to_rnea`` = median of the ``pin.rnea loop`` / median of the
+    operation, i.e. *how many times faster than pin.rnea from Python* (the
+    ``pin.rnea loop`` row is 1). That loop is the ordinary one,
+    ``for i in range(N): pin.rnea(model, data, Q[i], QD[i], QDD[i])``; the row
+    ``pin.rnea loop (pre-split)`` iterates over lists of 1-D arrays made
+    beforehand (no numpy indexing in the timed loop), the cheapest way to call
+    Pinocchio per state from Python, and the targets also report the speed-up
+    against it. Results of the Pinocchio loops are discarded.
+
+    Pinocchio's own C++ cost cannot be timed from Python. ``pinocchio_cpp_estimate``
+    subtracts the cost of the same binding call on an *empty* model (``pin.rnea``
+    with nq = 0: same argument conversion, no dynamics) from the cost of ``pin.rnea``
+    on one fixed state. Converting 3-vectors costs a little more than 0-vectors,
+    so this over-estimates the C++ time (the ratio is a lower bound on the
+    speed-up over the C++ code); it is labelled an estimate everywhere.
+
+Correctness (``checks``)
+    The benchmark verifies its own results on its states: closed-form torques vs
+    ``pin.rnea``, Slotine-Li ``Y(q, qd, v, a) theta`` vs ``crba a + C(q, qd) v + g``,
+    ``M`` vs ``crba``, closed-form forward dynamics vs ``aba``. Error measure and
+    tolerance are those of :mod:`rc3r.verify`. A failed check makes the command
+    return 1; a missed *timing* target does not (it is reported).
+
+Simulations (``sims``)
+    :func:`rc3r.scenarios.paper_scenarios` in continuous time, FBL-perturbed and
+    robust-perturbed sampled at 1 kHz (the robust law with the paper's gains
+    diverges at 1 kHz; the run stops early, which is reported), and, in the full
+    mode only, robust-perturbed for 2 s with the fast and the reference engine
+    (Pinocchio ABA + SciPy Radau). ``wall_s`` is :attr:`SimResult.wall_time_s`
+    (the integration; metrics excluded) -- median over repeats.
+
+Compile (``compile``) and memory (``memory``), full mode only
+    Cold start (``NUMBA_CACHE_DIR`` = a fresh empty directory) vs warm start (the
+    same directory again), each a fresh interpreter: import, first torque call,
+    first continuous and sampled simulation. Peak resident memory of
+    ``rc3r paper`` (into a temporary directory) from ``getrusage(RUSAGE_CHILDREN)``
+    of a wrapper process that has no other child.
+
+``--quick`` (CI: correctness only): 1 000 states, 1 repeat, 0.5 s simulations, no
+reference engine, no subprocesses. Timing targets are still evaluated (simulation
+times extrapolated to 10 s) but mean little at that size.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+from numba import njit
+
+from . import _kernels as K
+
+__all__ = ["run_bench", "render_text", "cmd_bench", "TARGETS"]
+
+#: The issue's targets: name -> (limit, comparison, unit, description).
+TARGETS = {
+    "tau_per_state": (1e-7, "<=", "s", "closed-form tau = Y(q,qd,qdd) theta per state, bulk or in compiled code"),
+    "tau_speedup_vs_rnea": (10.0, ">=", "x", "closed-form tau vs pin.rnea looped from Python"),
+    "slotine_li_per_state": (1e-7, "<=", "s", "Slotine-Li Y(q,qd,v,a) per state, bulk or in compiled code"),
+    "slotine_li_speedup_vs_rnea": (10.0, ">=", "x", "Slotine-Li Y vs pin.rnea looped from Python"),
+    "robust_perturbed_continuous_10s": (1.0, "<=", "s", "robust-perturbed, 10 s, continuous: wall time"),
+    "paper_five_continuous_10s": (5.0, "<=", "s", "all five paper scenarios, 10 s, continuous: total wall"),
+    "fbl_perturbed_sampled_1khz_10s": (0.1, "<=", "s", "FBL-perturbed, 10 s, sampled at 1 kHz: wall time"),
+}
+
+_SEED = 20261122
+_JIT = dict(cache=True, nogil=True)
+
+
+# ---- compiled helpers: the library's kernels called from a compiled loop ----------------
+
+
+@njit(**_JIT)
+def _slotine_li_in_loop(th, Q, QD, V, A, l2, g0, out):
+    """Y(q, qd, v, a) by the library kernel into one reused 3x15 (as the controllers do);
+    ``out[n] = Y theta`` keeps the result alive and checkable."""
+    Y = np.empty((3, 15))
+    for n in range(Q.shape[0]):
+        K.slotine_li_into(Q[n], QD[n], V[n], A[n], l2, g0, Y)
+        for i in range(3):
+            acc = 0.0
+            for j in range(15):
+                acc += Y[i, j] * th[j]
+            out[n, i] = acc
+
+
+@njit(**_JIT)
+def _forward_dynamics_in_loop(th, Q, QD, U, l2, g0, out):
+    """qdd = M^-1 (u - S qd - g) by the library kernel (the fast plant); returns #not-PD."""
+    w33 = np.empty((3, 3))
+    w3 = np.empty(3)
+    bad = 0
+    for n in range(Q.shape[0]):
+        if not K.forward_dynamics_into(th, Q[n], QD[n], U[n], l2, g0, out[n], w33, w3):
+            bad += 1
+    return bad
+
+
+# ---- small utilities --------------------------------------------------------------------
+
+
+def _progress(msg: str) -> None:
+    print(f"[bench] {msg}", file=sys.stderr, flush=True)
+
+
+def _time(fn, repeats: int) -> tuple[float, float]:
+    """(median, min) wall time of ``fn()`` in seconds over ``repeats`` calls (after one warm-up)."""
+    fn()
+    ts = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return float(np.median(ts)), float(min(ts))
+
+
+def _compare(x, ref) -> dict:
+    """Error measure of :mod:`rc3r.verify`: max |x - ref|, relative to max(1, max |ref|)."""
+    from .verify import TOL
+
+    x = np.asarray(x, float)
+    ref = np.asarray(ref, float)
+    err = float(np.max(np.abs(x - ref))) if x.size else 0.0
+    scale = float(np.max(np.abs(ref))) if ref.size else 0.0
+    rel = err / max(1.0, scale)
+    return {"max_abs_err": err, "max_abs_ref": scale, "rel_err": rel, "tol": TOL,
+            "states": int(x.shape[0]), "ok": bool(np.isfinite(rel) and rel <= TOL)}
+
+
+def _machine() -> dict:
+    import numba
+    import pinocchio as pin
+    import scipy
+
+    cpu = platform.processor() or ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    try:
+        usable = len(os.sched_getaffinity(0))
+    except AttributeError:
+        usable = os.cpu_count()
+    from . import __version__
+
+    return {
+        "date_utc": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "cpu": cpu, "cpu_count": os.cpu_count(), "cpus_usable": usable,
+        "platform": platform.platform(), "python": platform.python_version(),
+        "numpy": np.__version__, "numba": numba.__version__, "scipy": scipy.__version__,
+        "pinocchio": pin.__version__, "rc3r": __version__,
+    }
+
+
+# ---- operations -------------------------------------------------------------------------
+
+
+def _states(n: int, rng) -> dict:
+    """Random joint states: q in [-pi, pi], qd/v in [-5, 5] rad/s, qdd/a in [-20, 20] rad/s^2,
+    u in [-200, 200] N m."""
+    return {
+        "Q": rng.uniform(-np.pi, np.pi, (n, 3)), "QD": rng.uniform(-5, 5, (n, 3)),
+        "QDD": rng.uniform(-20, 20, (n, 3)), "V": rng.uniform(-5, 5, (n, 3)),
+        "A": rng.uniform(-20, 20, (n, 3)), "U": rng.uniform(-200, 200, (n, 3)),
+    }
+
+
+def bench_ops(n: int, repeats: int) -> tuple[dict, dict, dict]:
+    """Time the closed form and Pinocchio on ``n`` states; return (ops, checks, cpp_estimate)."""
+    import pinocchio as pin
+
+    from . import model as mdl
+    from . import regressor as reg
+    from .params import theta as theta_of
+    from .urdf import load_arm
+
+    arm = load_arm(None)
+    m, d = arm.model, arm.model.createData()
+    th = theta_of(arm.params)
+    l2, g0 = float(arm.params.lengths[1]), float(arm.params.g0)
+    S = _states(n, np.random.default_rng(_SEED))
+    Q, QD, QDD, V, A, U = (S[k] for k in ("Q", "QD", "QDD", "V", "A", "U"))
+    Ql, QDl, QDDl = list(Q), list(QD), list(QDD)
+    rnea, aba, crba = pin.rnea, pin.aba, pin.crba
+
+    def rnea_loop():
+        for i in range(n):
+            rnea(m, d, Q[i], QD[i], QDD[i])
+
+    def rnea_presplit():
+        for a, b, c in zip(Ql, QDl, QDDl):
+            rnea(m, d, a, b, c)
+
+    def aba_loop():
+        for i in range(n):
+            aba(m, d, Q[i], QD[i], U[i])
+
+    def crba_loop():
+        for i in range(n):
+            crba(m, d, Q[i])
+
+    out3 = np.empty((n, 3))
+    out3b = np.empty((n, 3))
+    out3c = np.empty((n, 3))
+    # (name, fn, what it computes, Pinocchio equivalent)
+    specs = [
+        ("pin.rnea loop", rnea_loop, "tau = RNEA(q, qd, qdd): for i in range(N): pin.rnea(.., Q[i], ..)",
+         "pin.rnea loop"),
+        ("pin.rnea loop (pre-split)", rnea_presplit,
+         "same over lists of 1-D arrays made beforehand (best case for Pinocchio)", "pin.rnea loop"),
+        ("pin.aba loop", aba_loop, "qdd = ABA(q, qd, u), Python loop (indexing as pin.rnea loop)",
+         "pin.aba loop"),
+        ("pin.crba loop", crba_loop, "M(q) = CRBA(q), Python loop (indexing as pin.rnea loop)", "pin.crba loop"),
+        ("inverse_dynamics batch", lambda: reg.inverse_dynamics(th, Q, QD, QDD, l2=l2, g0=g0),
+         "tau = Y(q,qd,qdd) theta, rc3r.regressor.inverse_dynamics on (N,3)", "pin.rnea loop"),
+        ("inverse_dynamics compiled", lambda: K.inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out3),
+         "same, compiled loop called directly (no wrapper, output preallocated)", "pin.rnea loop"),
+        ("slotine_li_regressor batch", lambda: reg.slotine_li_regressor(Q, QD, V, A, l2=l2, g0=g0),
+         "Y(q,qd,v,a) materialized (N,3,15)", "pin.rnea loop"),
+        ("slotine_li compiled", lambda: _slotine_li_in_loop(th, Q, QD, V, A, l2, g0, out3b),
+         "Y(q,qd,v,a) into a reused 3x15 inside compiled code, then Y theta", "pin.rnea loop"),
+        ("regressor batch", lambda: reg.regressor(Q, QD, QDD, l2=l2, g0=g0),
+         "Y(q,qd,qdd) materialized (N,3,15)", "pin.rnea loop"),
+        ("mass_matrix batch", lambda: mdl.mass_matrix(th, Q), "M(q) (N,3,3)", "pin.crba loop"),
+        ("forward_dynamics compiled", lambda: _forward_dynamics_in_loop(th, Q, QD, U, l2, g0, out3c),
+         "qdd = M^-1(u - S qd - g), the fast plant's kernel in a compiled loop", "pin.aba loop"),
+    ]
+    ops = {}
+    for name, fn, what, equiv in specs:
+        _progress(f"op {name} (N = {n}, {repeats} repeats) ...")
+        med, mn = _time(fn, repeats)
+        ops[name] = {"median_s": med / n, "min_s": mn / n, "what": what, "n_states": n,
+                     "repeats": repeats, "pin_equivalent": equiv}
+    base = ops["pin.rnea loop"]["median_s"]
+    for name, o in ops.items():
+        o["ratio_to_rnea"] = base / o["median_s"]
+        o["ratio_to_pin_equivalent"] = ops[o["pin_equivalent"]]["median_s"] / o["median_s"]
+
+    # ---- correctness on the same states (untimed) ----
+    _progress("checking the closed form against Pinocchio on the benchmark's states ...")
+    tau_ref = np.array([np.array(rnea(m, d, a, b, c)) for a, b, c in zip(Ql, QDl, QDDl)])
+    checks = {
+        "inverse_dynamics vs pin.rnea": _compare(reg.inverse_dynamics(th, Q, QD, QDD, l2=l2, g0=g0), tau_ref),
+        "inverse_dynamics compiled vs pin.rnea": _compare(out3, tau_ref),
+        "regressor @ theta vs pin.rnea": _compare(reg.regressor(Q, QD, QDD, l2=l2, g0=g0) @ th, tau_ref),
+    }
+    k = min(n, 2000)  # Slotine-Li, M and ABA references need several Pinocchio calls per state
+    sl_ref = np.empty((k, 3))
+    M_ref = np.empty((k, 3, 3))
+    fd_ref = np.empty((k, 3))
+    for i in range(k):
+        Mi = np.array(crba(m, d, Q[i]))
+        Mi = np.triu(Mi) + np.triu(Mi, 1).T  # Pinocchio fills the upper triangle
+        C = np.array(pin.computeCoriolisMatrix(m, d, Q[i], QD[i]))
+        gv = np.array(pin.computeGeneralizedGravity(m, d, Q[i]))
+        sl_ref[i] = Mi @ A[i] + C @ V[i] + gv
+        M_ref[i] = Mi
+        fd_ref[i] = np.array(aba(m, d, Q[i], QD[i], U[i]))
+    checks["slotine_li_regressor @ theta vs crba a + C v + g"] = _compare(
+        reg.slotine_li_regressor(Q[:k], QD[:k], V[:k], A[:k], l2=l2, g0=g0) @ th, sl_ref)
+    checks["slotine_li compiled vs crba a + C v + g"] = _compare(out3b[:k], sl_ref)
+    checks["mass_matrix vs pin.crba"] = _compare(mdl.mass_matrix(th, Q[:k]).reshape(k, 9), M_ref.reshape(k, 9))
+    checks["forward_dynamics compiled vs pin.aba"] = _compare(out3c[:k], fd_ref)
+
+    # ---- Pinocchio's C++ cost: an estimate (see the module docstring) ----
+    _progress("estimating Pinocchio's C++ cost (binding overhead subtracted) ...")
+    m0 = pin.Model()
+    d0 = m0.createData()
+    z = np.zeros(0)
+    q0, qd0, qdd0 = Q[0].copy(), QD[0].copy(), QDD[0].copy()
+    reps = max(n, 20000)
+
+    def same():
+        for _ in range(reps):
+            rnea(m, d, q0, qd0, qdd0)
+
+    def empty():
+        for _ in range(reps):
+            rnea(m0, d0, z, z, z)
+
+    t_same = _time(same, repeats)[0] / reps
+    t_empty = _time(empty, repeats)[0] / reps
+    t_cpp = max(t_same - t_empty, 0.0)
+    best_tau = min(ops["inverse_dynamics compiled"]["median_s"], ops["inverse_dynamics batch"]["median_s"])
+    cpp = {
+        "estimate": True,
+        "method": "median per call of pin.rnea on one fixed state minus pin.rnea on an empty model "
+                  "(nq = 0: same binding path, no dynamics), both looped from Python",
+        "rnea_fixed_state_s": t_same, "rnea_empty_model_s": t_empty, "rnea_cpp_estimate_s": t_cpp,
+        "closed_form_tau_s": best_tau,
+        "ratio_cpp_estimate_to_closed_form": (t_cpp / best_tau) if best_tau > 0 else None,
+        "note": "upper bound on the C++ time (3-vectors cost more to convert than 0-vectors), "
+                "so the ratio is a lower bound on the speed-up over Pinocchio's C++",
+    }
+    return ops, checks, cpp
+
+
+# ---- simulations ------------------------------------------------------------------------
+
+
+def _sim_row(spec, res, walls, execute_s) -> dict:
+    o = spec.options
+    return {
+        "wall_s": float(np.median(walls)), "min_wall_s": float(min(walls)), "repeats": len(walls),
+        "execute_s": execute_s, "rhs_evals": int(res.rhs_evals), "steps": int(res.steps),
+        "rejected_steps": int(res.rejected_steps), "status": res.status, "message": res.message,
+        "t_end": float(res.t_end), "duration_s": float(o.duration), "mode": o.mode,
+        "rate_hz": o.rate, "engine": o.engine,
+    }
+
+
+def _run(spec, repeats: int):
+    from .scenarios import execute
+
+    walls = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        res, _m = execute(spec)
+        execute_s = time.perf_counter() - t0
+        walls.append(res.wall_time_s)
+    return _sim_row(spec, res, walls, execute_s)
+
+
+def bench_sims(duration: float, repeats: int, reference: bool) -> dict:
+    from .scenarios import build_run, execute, paper_scenarios
+
+    # warm-up: compile or load every integrator/law combination used below
+    _progress("warming up the simulator (numba compile or cache load) ...")
+    for spec in paper_scenarios(duration=0.01) + paper_scenarios(duration=0.01, rate=1000.0):
+        execute(spec)
+    sims = {}
+    specs = paper_scenarios(duration=duration)
+    for k, spec in enumerate(specs, 1):
+        _progress(f"sim [{k}/{len(specs)}] {spec.name}, continuous, {duration:g} s, {repeats} repeats ...")
+        sims[spec.name] = _run(spec, repeats)
+    for c in ("fbl", "robust"):
+        spec = build_run(controller=c, perturbed=True, eps=0.5 if c == "robust" else None, rate=1000.0,
+                         duration=duration, name=f"{c}-perturbed@1kHz")
+        _progress(f"sim {spec.name}, sampled 1 kHz, {duration:g} s ...")
+        sims[spec.name] = _run(spec, repeats)
+    if reference:
+        d = 2.0
+        for engine in ("fast", "reference"):
+            spec = build_run(controller="robust", perturbed=True, eps=0.5, duration=d, engine=engine,
+                             name=f"robust-perturbed-{d:g}s-{engine}")
+            slow = " (Pinocchio ABA + SciPy Radau, slow)" if engine == "reference" else ""
+            _progress(f"sim {spec.name}, continuous, {d:g} s, engine {engine}{slow} ...")
+            sims[spec.name] = _run(spec, 1 if engine == "reference" else repeats)
+    return sims
+
+
+# ---- subprocess measurements ------------------------------------------------------------
+
+_COMPILE_SCRIPT = r"""
+import json, sys, time
+t0 = time.perf_counter()
+import numpy as np
+import rc3r.regressor as reg, rc3r.scenarios as S
+t1 = time.perf_counter()
+z = np.zeros((4, 3))
+reg.inverse_dynamics(np.ones(15), z, z, z, l2=0.5)
+t2 = time.perf_counter()
+res, _ = S.execute(S.build_run(controller="robust", perturbed=True, eps=0.5, duration=0.1))
+t3 = time.perf_counter()
+res2, _ = S.execute(S.build_run(controller="fbl", perturbed=True, rate=1000.0, duration=0.1))
+t4 = time.perf_counter()
+print(json.dumps({"import_s": t1 - t0, "first_inverse_dynamics_s": t2 - t1,
+                  "first_continuous_sim_s": t3 - t2, "first_sampled_sim_s": t4 - t3,
+                  "ok": bool(res.ok and res2.ok)}))
+"""
+
+
+def _clean_env(**extra) -> dict:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    env.update(extra)
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
+
+
+def bench_compile() -> dict:
+    """Cold (empty NUMBA_CACHE_DIR) vs warm (same dir) start, each a fresh interpreter."""
+    out = {"script": "import rc3r.regressor, rc3r.scenarios; inverse_dynamics on 4 states; "
+                     "robust-perturbed 0.1 s continuous; fbl-perturbed 0.1 s sampled 1 kHz"}
+    cache = tempfile.mkdtemp(prefix="rc3r-numba-cache-")
+    try:
+        for label in ("cold", "warm"):
+            _progress(f"compile: {label} start in a subprocess (NUMBA_CACHE_DIR = {cache}) ...")
+            t0 = time.perf_counter()
+            p = subprocess.run([sys.executable, "-c", _COMPILE_SCRIPT], capture_output=True, text=True,
+                               env=_clean_env(NUMBA_CACHE_DIR=cache), timeout=900)
+            wall = time.perf_counter() - t0
+            if p.returncode != 0:
+                out[label] = {"error": (p.stderr.strip().splitlines() or ["failed"])[-1]}
+                continue
+            r = json.loads(p.stdout.strip().splitlines()[-1])
+            r["process_wall_s"] = wall
+            out[label] = r
+        size = sum(os.path.getsize(os.path.join(dp, f)) for dp, _, fs in os.walk(cache) for f in fs)
+        out["cache_bytes"] = size
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    if "process_wall_s" in out.get("cold", {}) and "process_wall_s" in out.get("warm", {}):
+        out["saved_by_cache_s"] = out["cold"]["process_wall_s"] - out["warm"]["process_wall_s"]
+    return out
+
+
+_MEMORY_WRAPPER = r"""
+import json, resource, subprocess, sys, time
+t0 = time.perf_counter()
+p = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+wall = time.perf_counter() - t0
+ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(json.dumps({"returncode": p.returncode, "ru_maxrss": ru.ru_maxrss, "wall_s": wall,
+                  "stderr_tail": p.stderr.strip().splitlines()[-1:] }))
+"""
+
+
+def bench_memory() -> dict:
+    """Peak RSS of ``rc3r paper --out <tmp>``, measured by a wrapper whose only child it is."""
+    tmp = tempfile.mkdtemp(prefix="rc3r-bench-paper-")
+    try:
+        cmd = [sys.executable, "-c", "import sys; from rc3r.cli import main; sys.exit(main(sys.argv[1:]))",
+               "paper", "--out", tmp]
+        _progress("memory: `rc3r paper` in a subprocess (about 15 s) ...")
+        p = subprocess.run([sys.executable, "-c", _MEMORY_WRAPPER, *cmd], capture_output=True, text=True,
+                           env=_clean_env(), timeout=1800)
+        if p.returncode != 0:
+            return {"command": "rc3r paper --out <tmpdir>", "error": (p.stderr.strip().splitlines() or ["?"])[-1]}
+        r = json.loads(p.stdout.strip().splitlines()[-1])
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    # Linux reports kilobytes, macOS bytes
+    scale = 1 if sys.platform == "darwin" else 1024
+    return {"command": "rc3r paper --out <tmpdir>", "peak_rss_bytes": int(r["ru_maxrss"]) * scale,
+            "peak_rss_mib": int(r["ru_maxrss"]) * scale / 2 ** 20, "wall_s": r["wall_s"],
+            "returncode": r["returncode"], "method": "resource.getrusage(RUSAGE_CHILDREN).ru_maxrss "
+            "of a wrapper process whose only child is the command"}
+
+
+# ---- targets ----------------------------------------------------------------------------
+
+
+def _targets(ops: dict, sims: dict, duration: float) -> dict:
+    def entry(name, measured, note=""):
+        limit, cmp, unit, desc = TARGETS[name]
+        met = bool(measured <= limit) if cmp == "<=" else bool(measured >= limit)
+        return {"target": limit, "comparison": cmp, "unit": unit, "measured": float(measured),
+                "met": met, "description": desc, "note": note}
+
+    rnea = ops["pin.rnea loop"]["median_s"]
+    rnea_best = ops["pin.rnea loop (pre-split)"]["median_s"]
+    t = {}
+    for key, bulk, comp in (("tau", "inverse_dynamics batch", "inverse_dynamics compiled"),
+                            ("slotine_li", "slotine_li_regressor batch", "slotine_li compiled")):
+        best = min((bulk, comp), key=lambda k: ops[k]["median_s"])
+        tb = ops[best]["median_s"]
+        t[f"{key}_per_state"] = entry(f"{key}_per_state", tb, f"best of '{bulk}' and '{comp}': '{best}' (median)")
+        t[f"{key}_speedup_vs_rnea"] = entry(
+            f"{key}_speedup_vs_rnea", rnea / tb,
+            f"pin.rnea loop median / '{best}' median; vs the pre-split loop: {rnea_best / tb:.3g}x")
+    scale = 10.0 / duration
+    note = "" if duration == 10.0 else f"extrapolated from {duration:g} s runs (x {scale:g}): indicative only"
+    t["robust_perturbed_continuous_10s"] = entry("robust_perturbed_continuous_10s",
+                                                 sims["robust-perturbed"]["wall_s"] * scale, note)
+    five = ("fbl-ideal", "robust-ideal", "fbl-perturbed", "robust-perturbed", "robust-perturbed-eps0.05")
+    t["paper_five_continuous_10s"] = entry("paper_five_continuous_10s",
+                                           sum(sims[s]["wall_s"] for s in five) * scale,
+                                           (note + "; " if note else "") + "sum of the five medians")
+    t["fbl_perturbed_sampled_1khz_10s"] = entry("fbl_perturbed_sampled_1khz_10s",
+                                                sims["fbl-perturbed@1kHz"]["wall_s"] * scale, note)
+    return t
+
+
+# ---- the whole benchmark ----------------------------------------------------------------
+
+
+def run_bench(quick: bool = False) -> dict:
+    """Run everything; return the JSON-ready result (see the module docstring)."""
+    t_start = time.perf_counter()
+    n, repeats = (1000, 1) if quick else (100_000, 7)
+    duration, sim_repeats = (0.5, 1) if quick else (10.0, 3)
+    out = {"mode": "quick" if quick else "full", "machine": _machine(),
+           "settings": {"n_states": n, "repeats": repeats, "sim_duration_s": duration,
+                        "sim_repeats": sim_repeats, "seed": _SEED}}
+    ops, checks, cpp = bench_ops(n, repeats)
+    out["ops"] = ops
+    out["checks"] = checks
+    out["pinocchio_cpp_estimate"] = cpp
+    out["sims"] = bench_sims(duration, sim_repeats, reference=not quick)
+    if not quick and "robust-perturbed-2s-reference" in out["sims"]:
+        f, r = out["sims"]["robust-perturbed-2s-fast"], out["sims"]["robust-perturbed-2s-reference"]
+        out["reference_speedup"] = {"fast_wall_s": f["wall_s"], "reference_wall_s": r["wall_s"],
+                                    "speedup": r["wall_s"] / f["wall_s"] if f["wall_s"] > 0 else None}
+    out["targets"] = _targets(ops, out["sims"], duration)
+    skip = {"skipped": "quick mode"}
+    out["compile"] = skip if quick else bench_compile()
+    out["memory"] = skip if quick else bench_memory()
+    out["checks_ok"] = all(c["ok"] for c in checks.values())
+    out["total_wall_s"] = time.perf_counter() - t_start
+    return out
+
+
+# ---- text output ------------------------------------------------------------------------
+
+
+def _si(x: float | None) -> str:
+    """Seconds with a readable unit."""
+    if x is None or not np.isfinite(x):
+        return "-"
+    a = abs(x)
+    for unit, f in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9)):
+        if a >= f or unit == "ns":
+            return f"{x / f:.3g} {unit}"
+    return f"{x:g} s"
+
+
+def _table(head: list[str], rows: list[list[str]], right: set[int] = frozenset()) -> str:
+    w = [max(len(str(r[i])) for r in [head] + rows) for i in range(len(head))]
+
+    def fmt(r):
+        return "  ".join(str(c).rjust(w[i]) if i in right else str(c).ljust(w[i]) for i, c in enumerate(r)).rstrip()
+
+    return "\n".join([fmt(head), "  ".join("-" * x for x in w)] + [fmt(r) for r in rows])
+
+
+def render_text(r: dict) -> str:
+    mc = r["machine"]
+    st = r["settings"]
+    lines = [f"rc3r bench ({r['mode']}) -- {mc['date_utc']}, {mc['cpu']}, {mc['cpus_usable']} usable CPU(s); "
+             f"python {mc['python']}, numpy {mc['numpy']}, numba {mc['numba']}, pinocchio {mc['pinocchio']}", ""]
+    lines.append(f"Operations: time per state over N = {st['n_states']} random states, {st['repeats']} repeat(s) "
+                 "after a warm-up; 'x rnea' = pin.rnea-loop median / median (times faster).")
+    rows = [[k, _si(o["median_s"]), _si(o["min_s"]), f"{o['ratio_to_rnea']:.3g}",
+             "-" if k.startswith("pin.") else
+             f"{o['ratio_to_pin_equivalent']:.3g} vs {o['pin_equivalent'].split()[0]}"]
+            for k, o in r["ops"].items()]
+    lines += [_table(["operation", "median/state", "min/state", "x rnea", "x pin equivalent"], rows, {1, 2, 3}), ""]
+    cpp = r["pinocchio_cpp_estimate"]
+    lines.append(f"Pinocchio C++ cost (ESTIMATE: pin.rnea on a fixed state {_si(cpp['rnea_fixed_state_s'])} minus "
+                 f"on an empty model {_si(cpp['rnea_empty_model_s'])}): rnea ~ {_si(cpp['rnea_cpp_estimate_s'])}"
+                 f" per call; closed-form tau {_si(cpp['closed_form_tau_s'])} -> ~"
+                 f"{cpp['ratio_cpp_estimate_to_closed_form']:.3g}x faster than Pinocchio's C++ (lower bound).")
+    lines.append("")
+    lines.append("Correctness on the benchmark's states (error measure of rc3r.verify):")
+    rows = [[k, str(c["states"]), f"{c['max_abs_err']:.3g}", f"{c['rel_err']:.3g}", "ok" if c["ok"] else "FAIL"]
+            for k, c in r["checks"].items()]
+    lines += [_table(["check", "states", "max abs err", "rel err", ""], rows, {1, 2, 3}), ""]
+    lines.append(f"Simulations (wall = integration only, median of {st['sim_repeats']} run(s); "
+                 "execute = simulate + metrics, last run):")
+    rows = []
+    for k, s in r["sims"].items():
+        mode = s["mode"] if s["rate_hz"] is None else f"sampled {s['rate_hz'] / 1000:g} kHz"
+        rows.append([k, mode, s["engine"], f"{s['duration_s']:g} s", _si(s["wall_s"]), _si(s["execute_s"]),
+                     str(s["rhs_evals"]), s["message"]])
+    lines += [_table(["scenario", "mode", "engine", "duration", "wall", "execute", "rhs evals", "status"],
+                     rows, {3, 4, 5, 6}), ""]
+    if "reference_speedup" in r:
+        rs = r["reference_speedup"]
+        lines += [f"Fast engine vs reference (Pinocchio ABA + SciPy Radau), robust-perturbed 2 s: "
+                  f"{_si(rs['fast_wall_s'])} vs {_si(rs['reference_wall_s'])} -> {rs['speedup']:.3g}x", ""]
+    lines.append("Targets:")
+    rows = []
+    for k, t in r["targets"].items():
+        fmt = _si if t["unit"] == "s" else (lambda x: f"{x:.3g}x")
+        rows.append([k, f"{t['comparison']} {fmt(t['target'])}", fmt(t["measured"]),
+                     "met" if t["met"] else "NOT MET", t["note"]])
+    lines += [_table(["target", "limit", "measured", "", "note"], rows, {2}), ""]
+    c = r["compile"]
+    if "skipped" in c:
+        lines.append(f"Compile (numba first call): skipped ({c['skipped']}).")
+    else:
+        lines.append("Compile (numba first call), fresh interpreter each; cold = empty NUMBA_CACHE_DIR, "
+                     "warm = same dir again:")
+        rows = []
+        for label in ("cold", "warm"):
+            x = c.get(label, {})
+            if "error" in x:
+                rows.append([label, "error: " + x["error"], "", "", "", ""])
+                continue
+            rows.append([label, _si(x.get("import_s")), _si(x.get("first_inverse_dynamics_s")),
+                         _si(x.get("first_continuous_sim_s")), _si(x.get("first_sampled_sim_s")),
+                         _si(x.get("process_wall_s"))])
+        lines += [_table(["start", "import", "1st inverse_dynamics", "1st continuous sim", "1st sampled sim",
+                          "process total"], rows, {1, 2, 3, 4, 5})]
+        if "saved_by_cache_s" in c:
+            lines.append(f"cache saves {_si(c['saved_by_cache_s'])} per fresh process "
+                         f"(cache size {c.get('cache_bytes', 0) / 2 ** 20:.2f} MiB)")
+    lines.append("")
+    mem = r["memory"]
+    if "skipped" in mem:
+        lines.append(f"Peak memory of `rc3r paper`: skipped ({mem['skipped']}).")
+    elif "error" in mem:
+        lines.append(f"Peak memory of `rc3r paper`: error: {mem['error']}")
+    else:
+        lines.append(f"Peak memory of `rc3r paper`: {mem['peak_rss_mib']:.0f} MiB resident "
+                     f"(wall {_si(mem['wall_s'])}, exit {mem['returncode']}).")
+    lines.append("")
+    lines.append(f"Correctness: {'all checks pass' if r['checks_ok'] else 'SOME CHECKS FAIL'}. "
+                 f"Benchmark wall time {_si(r['total_wall_s'])}.")
+    return "\n".join(lines)
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x) if np.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def cmd_bench(args) -> int:
+    """``rc3r bench [--json] [--quick]``: print the tables (or one JSON object); 1 if a check fails."""
+    r = run_bench(quick=bool(getattr(args, "quick", False)))
+    if getattr(args, "json", False):
+        print(json.dumps(_jsonable(r), indent=2))
+    else:
+        print(render_text(r))
+    if not r["checks_ok"]:
+        print("rc3r: error: the closed form disagrees with Pinocchio on the benchmark's states", file=sys.stderr)
+        return 1
+    return 0

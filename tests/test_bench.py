@@ -1,0 +1,122 @@
+"""``rc3r bench --quick --json``: runs, prints the documented JSON, and checks itself.
+
+Never asserts wall-clock times (only that they are positive): timings depend on the
+machine; the targets are reported by the benchmark, not tested here.
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from rc3r import bench
+from rc3r.cli import main
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def quick():
+    """One ``rc3r bench --quick --json`` run for the whole module: (exit code, parsed JSON, stdout)."""
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = main(["bench", "--quick", "--json"])
+    text = buf.getvalue()
+    return code, json.loads(text), text
+
+
+def test_quick_json_exits_zero_and_has_the_documented_keys(quick):
+    code, r, _ = quick
+    assert code == 0
+    for key in ("ops", "sims", "machine", "targets", "compile", "memory", "checks"):
+        assert key in r, key
+    assert r["mode"] == "quick"
+
+
+def test_ops_have_positive_times_and_ratios(quick):
+    _, r, _ = quick
+    required = {"pin.rnea loop", "pin.aba loop", "pin.crba loop", "inverse_dynamics batch",
+                "slotine_li_regressor batch", "regressor batch", "mass_matrix batch"}
+    assert required <= set(r["ops"])
+    for name, o in r["ops"].items():
+        assert o["median_s"] > 0 and o["min_s"] > 0, name
+        assert o["min_s"] <= o["median_s"] * (1 + 1e-12), name
+        assert o["ratio_to_rnea"] > 0, name
+    assert r["ops"]["pin.rnea loop"]["ratio_to_rnea"] == pytest.approx(1.0)
+
+
+def test_sims_have_positive_times_and_rhs_counts(quick):
+    _, r, _ = quick
+    five = {"fbl-ideal", "robust-ideal", "fbl-perturbed", "robust-perturbed", "robust-perturbed-eps0.05"}
+    assert five | {"fbl-perturbed@1kHz", "robust-perturbed@1kHz"} <= set(r["sims"])
+    for name, s in r["sims"].items():
+        assert s["wall_s"] > 0 and s["rhs_evals"] > 0, name
+    for name in five | {"fbl-perturbed@1kHz"}:
+        assert r["sims"][name]["status"] == "ok", (name, r["sims"][name]["message"])
+    # the robust law with the paper's gains diverges at 1 kHz: reported, not hidden
+    assert r["sims"]["robust-perturbed@1kHz"]["status"] == "diverged"
+    assert "reference" not in " ".join(r["sims"])  # the slow engine only runs in full mode
+
+
+def test_targets_are_reported_with_met_flags(quick):
+    _, r, _ = quick
+    assert set(bench.TARGETS) == set(r["targets"])
+    for name, t in r["targets"].items():
+        assert isinstance(t["met"], bool), name
+        assert t["measured"] > 0 and t["target"] > 0, name
+
+
+def test_closed_form_agrees_with_pinocchio_on_the_benchmark_states(quick):
+    _, r, _ = quick
+    checks = r["checks"]
+    assert r["checks_ok"] is True
+    for name in ("inverse_dynamics vs pin.rnea", "inverse_dynamics compiled vs pin.rnea",
+                 "regressor @ theta vs pin.rnea", "slotine_li_regressor @ theta vs crba a + C v + g"):
+        c = checks[name]
+        assert c["ok"], (name, c)
+        assert c["states"] == r["settings"]["n_states"]
+        assert c["max_abs_err"] < 1e-9 * max(1.0, c["max_abs_ref"]), (name, c)
+        assert c["max_abs_ref"] > 1.0  # the torques are not trivially zero
+
+
+def test_quick_skips_the_subprocess_measurements(quick):
+    _, r, _ = quick
+    assert "skipped" in r["compile"] and "skipped" in r["memory"]
+
+
+def test_text_output_renders_tables_and_targets(quick):
+    _, r, _ = quick
+    text = bench.render_text(r)
+    for word in ("operation", "pin.rnea loop", "inverse_dynamics batch", "scenario", "rhs evals",
+                 "Targets:", "robust-perturbed@1kHz", "diverged"):
+        assert word in text, word
+    assert ("met" in text) or ("NOT MET" in text)
+
+
+def test_compare_flags_a_wrong_result():
+    ref = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    assert bench._compare(ref + 1e-13, ref)["ok"]
+    bad = bench._compare(ref * (1 + 1e-6), ref)
+    assert not bad["ok"] and bad["max_abs_err"] == pytest.approx(6e-6)
+
+
+def test_a_failed_check_makes_the_command_fail(monkeypatch, capsys):
+    fake = {"checks_ok": False, "checks": {}}
+    monkeypatch.setattr(bench, "run_bench", lambda quick=False: fake)
+    monkeypatch.setattr(bench, "render_text", lambda r: "table")
+    assert bench.cmd_bench(SimpleNamespace(json=False, quick=True)) == 1
+    assert "disagrees with Pinocchio" in capsys.readouterr().err
+
+
+def test_benchmarks_script_is_the_cli():
+    p = subprocess.run([sys.executable, str(REPO / "benchmarks" / "run.py"), "--help"],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0
+    assert "--quick" in p.stdout
