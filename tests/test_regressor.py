@@ -207,3 +207,17 @@ def test_shapes(rng):
     np.testing.assert_array_equal(Yb[2], reg.slotine_li_regressor(Q[2], QD[0], V[0], A[0], l2=1.0))
     with pytest.raises(ValueError):
         reg.regressor(np.zeros((4, 2)), QD, QDD, l2=1.0)
+
+
+def test_inverse_dynamics_equals_regressor_times_theta_and_rnea(arm, th, pdata, rng):
+    """inverse_dynamics (M qdd + S qd + g from the term kernels) == Y(q, qd, qdd) theta == pinocchio.rnea."""
+    import pinocchio as pin
+
+    from rc3r.regressor import inverse_dynamics, regressor
+
+    l2 = arm.params.lengths[1]
+    Q, QD, QDD = rng.uniform(-3, 3, (3, 40, 3))
+    tau = inverse_dynamics(th, Q, QD, QDD, l2=l2)
+    np.testing.assert_allclose(tau, regressor(Q, QD, QDD, l2=l2) @ th, rtol=0, atol=1e-10)
+    ref = np.array([pin.rnea(arm.model, pdata, q, qd, qdd) for q, qd, qdd in zip(Q, QD, QDD)])
+    np.testing.assert_allclose(tau, ref, rtol=0, atol=1e-10)

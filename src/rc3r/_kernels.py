@@ -20,40 +20,71 @@ from numba import njit
 _JIT = dict(cache=True, nogil=True, fastmath=False)
 
 
+_INLINE = dict(_JIT, inline="always")
+
+
+@njit(**_INLINE)
+def _trig(q2, q3):
+    """(s2, c2, s3, c3, s23, c23); sin/cos(q2 + q3) by the addition theorem (4 libm calls)."""
+    s2 = math.sin(q2); c2 = math.cos(q2)
+    s3 = math.sin(q3); c3 = math.cos(q3)
+    return s2, c2, s3, c3, s2 * c3 + c2 * s3, c2 * c3 - s2 * s3
+
+
+@njit(**_INLINE)
+def _inertia_terms(th, s2, c2, s3, c3, s23, c23):
+    """(m11, m12, m13, m22, m23) of section 3.1 (m11 with the s23 typo fixed); m33 = theta13."""
+    m13 = th[9] * c23 + th[10] * s23
+    m11 = (th[0] + th[1] * s2 * s2 + th[2] * s2 * c2 + th[3] * s23 * s23 + th[4] * s23 * c23
+           + 2.0 * th[5] * c2 * s23 + 2.0 * th[6] * c2 * c23)
+    return (m11, th[7] * c2 + th[8] * s2 + m13, m13,
+            th[11] + 2.0 * th[5] * s3 + 2.0 * th[6] * c3, th[12] + th[5] * s3 + th[6] * c3)
+
+
+@njit(**_INLINE)
+def _christoffel_terms(th, s2, c2, s3, c3, s23, c23):
+    """(A, B, D, E, F): A = dm11/dq2 / 2, B = dm11/dq3 / 2, D = dm12/dq2, E = dm13/dq3, F = dm23/dq3."""
+    B = (th[3] * c23 * s23 + 0.5 * th[4] * (c23 * c23 - s23 * s23)
+         + th[5] * c2 * c23 - th[6] * c2 * s23)
+    A = (th[1] * c2 * s2 + 0.5 * th[2] * (c2 * c2 - s2 * s2) + B
+         - th[5] * s2 * s23 - th[6] * s2 * c23)
+    E = -th[9] * s23 + th[10] * c23
+    D = -th[7] * s2 + th[8] * c2 + E
+    F = th[5] * c3 - th[6] * s3
+    return A, B, D, E, F
+
+
+@njit(**_INLINE)
+def _coriolis_vector(A, B, D, E, F, qd1, qd2, qd3):
+    """c = S(q, qd) qd with the paper's S (rows of :func:`coriolis_into`), expanded."""
+    c1 = (qd2 * A + qd3 * B) * qd1 + (qd1 * A + qd2 * D + qd3 * E) * qd2 + (qd1 * B + (qd2 + qd3) * E) * qd3
+    c2 = -qd1 * A * qd1 + qd3 * F * qd2 + (qd2 + qd3) * F * qd3
+    c3 = -qd1 * B * qd1 - qd2 * F * qd2
+    return c1, c2, c3
+
+
+@njit(**_INLINE)
+def _gravity_terms(th, s2, c2, s23, c23, l2, g0):
+    """(g2, g3) of section 3.1; theta_6, theta_7 enter divided by l2; g1 = 0."""
+    g3 = g0 * (th[6] * c23 + th[5] * s23) / l2
+    return g0 * (th[13] * c2 + th[14] * s2) + g3, g3
+
+
 @njit(**_JIT)
 def mass_matrix_into(th, q, M):
-    """M(q) (3x3) of section 3.1 (m11 with the s23 typo fixed)."""
-    s2 = math.sin(q[1]); c2 = math.cos(q[1])
-    s3 = math.sin(q[2]); c3 = math.cos(q[2])
-    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
-    M[0, 0] = (th[0] + th[1] * s2 * s2 + th[2] * s2 * c2 + th[3] * s23 * s23 + th[4] * s23 * c23
-               + 2.0 * th[5] * c2 * s23 + 2.0 * th[6] * c2 * c23)
-    m13 = th[9] * c23 + th[10] * s23
-    M[0, 1] = th[7] * c2 + th[8] * s2 + m13
-    M[0, 2] = m13
-    M[1, 1] = th[11] + 2.0 * th[5] * s3 + 2.0 * th[6] * c3
-    M[1, 2] = th[12] + th[5] * s3 + th[6] * c3
-    M[2, 2] = th[12]
-    M[1, 0] = M[0, 1]
-    M[2, 0] = M[0, 2]
-    M[2, 1] = M[1, 2]
+    """M(q) (3x3) of section 3.1."""
+    s2, c2, s3, c3, s23, c23 = _trig(q[1], q[2])
+    m11, m12, m13, m22, m23 = _inertia_terms(th, s2, c2, s3, c3, s23, c23)
+    M[0, 0] = m11; M[0, 1] = m12; M[0, 2] = m13
+    M[1, 0] = m12; M[1, 1] = m22; M[1, 2] = m23
+    M[2, 0] = m13; M[2, 1] = m23; M[2, 2] = th[12]
 
 
 @njit(**_JIT)
 def coriolis_into(th, q, qd, S):
     """The paper's factorization S(q, qd) (3x3); equals the Christoffel-symbol matrix."""
-    s2 = math.sin(q[1]); c2 = math.cos(q[1])
-    s3 = math.sin(q[2]); c3 = math.cos(q[2])
-    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
-    # B = (1/2) dm11/dq3, A = (1/2) dm11/dq2, D = dm12/dq2, E = dm13/dq3, F = dm23/dq3
-    B = (th[3] * c23 * s23 + 0.5 * th[4] * (c23 * c23 - s23 * s23)
-         + th[5] * c2 * c23 - th[6] * c2 * s23)
-    A = (th[1] * c2 * s2 + 0.5 * th[2] * (c2 * c2 - s2 * s2) + th[3] * c23 * s23
-         + 0.5 * th[4] * (c23 * c23 - s23 * s23) + th[5] * (c2 * c23 - s2 * s23)
-         - th[6] * (s2 * c23 + c2 * s23))
-    E = -th[9] * s23 + th[10] * c23
-    D = -th[7] * s2 + th[8] * c2 + E
-    F = th[5] * c3 - th[6] * s3
+    s2, c2, s3, c3, s23, c23 = _trig(q[1], q[2])
+    A, B, D, E, F = _christoffel_terms(th, s2, c2, s3, c3, s23, c23)
     S[0, 0] = qd[1] * A + qd[2] * B
     S[0, 1] = qd[0] * A + qd[1] * D + qd[2] * E
     S[0, 2] = qd[0] * B + (qd[1] + qd[2]) * E
@@ -67,70 +98,95 @@ def coriolis_into(th, q, qd, S):
 
 @njit(**_JIT)
 def gravity_into(th, q, l2, g0, g):
-    """g(q) (3,) of section 3.1; theta_6, theta_7 enter divided by l2."""
-    s2 = math.sin(q[1]); c2 = math.cos(q[1])
-    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
-    g3 = g0 * (th[6] * c23 + th[5] * s23) / l2
+    """g(q) (3,) of section 3.1."""
+    s2, c2, _s3, _c3, s23, c23 = _trig(q[1], q[2])
+    g2, g3 = _gravity_terms(th, s2, c2, s23, c23, l2, g0)
     g[0] = 0.0
-    g[1] = g0 * (th[13] * c2 + th[14] * s2) + g3
+    g[1] = g2
     g[2] = g3
+
+
+@njit(**_INLINE)
+def _dynamics_terms(th, q2, q3, qd1, qd2, qd3, l2, g0):
+    """M entries and h = S qd + g at one state: (m11, m12, m13, m22, m23, h1, h2, h3)."""
+    s2, c2, s3, c3, s23, c23 = _trig(q2, q3)
+    m11, m12, m13, m22, m23 = _inertia_terms(th, s2, c2, s3, c3, s23, c23)
+    A, B, D, E, F = _christoffel_terms(th, s2, c2, s3, c3, s23, c23)
+    c1, c2_, c3_ = _coriolis_vector(A, B, D, E, F, qd1, qd2, qd3)
+    g2, g3 = _gravity_terms(th, s2, c2, s23, c23, l2, g0)
+    return m11, m12, m13, m22, m23, c1, c2_ + g2, c3_ + g3
+
+
+@njit(**_JIT)
+def inverse_dynamics_into(th, q, qd, qdd, l2, g0, tau):
+    """tau = M(q) qdd + S(q, qd) qd + g(q) directly from the terms (no Y materialized)."""
+    m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, q[1], q[2], qd[0], qd[1], qd[2], l2, g0)
+    tau[0] = m11 * qdd[0] + m12 * qdd[1] + m13 * qdd[2] + h1
+    tau[1] = m12 * qdd[0] + m22 * qdd[1] + m23 * qdd[2] + h2
+    tau[2] = m13 * qdd[0] + m23 * qdd[1] + th[12] * qdd[2] + h3
 
 
 @njit(**_JIT)
 def slotine_li_into(q, qd, v, a, l2, g0, Y):
-    """Y(q, qd, v, a) (3x15) with ``Y theta = M a + S(q, qd) v + g`` (derived, docs/model.md)."""
-    s2 = math.sin(q[1]); c2 = math.cos(q[1])
-    s3 = math.sin(q[2]); c3 = math.cos(q[2])
-    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
-    P12 = v[0] * qd[1] + qd[0] * v[1]
-    P13 = v[0] * qd[2] + qd[0] * v[2]
-    W = qd[2] * v[1] + (qd[1] + qd[2]) * v[2]
-    w11 = qd[0] * v[0]
-    w22 = qd[1] * v[1]
+    """Y(q, qd, v, a) (3x15) with ``Y theta = M a + S(q, qd) v + g`` (derived, docs/model.md).
+
+    Every entry is written exactly once (structural zeros included).
+    """
+    s2, c2, s3, c3, s23, c23 = _trig(q[1], q[2])
+    qd1 = qd[0]; qd2 = qd[1]; qd3 = qd[2]
+    a1 = a[0]; a2 = a[1]; a3 = a[2]
+    P12 = v[0] * qd2 + qd1 * v[1]
+    P13 = v[0] * qd3 + qd1 * v[2]
+    W = qd3 * v[1] + (qd2 + qd3) * v[2]
+    w11 = qd1 * v[0]
+    w22 = qd2 * v[1]
     cs2 = c2 * s2; d2 = 0.5 * (c2 * c2 - s2 * s2)
     cs23 = c23 * s23; d23 = 0.5 * (c23 * c23 - s23 * s23)
     k6 = c2 * c23 - s2 * s23      # cos(2 q2 + q3)
     k7 = s2 * c23 + c2 * s23      # sin(2 q2 + q3)
     gl = g0 / l2
-    a23 = a[1] + a[2]
-    for i in range(3):
-        for j in range(15):
-            Y[i, j] = 0.0
+    a23 = a2 + a3
     # row 1: m11 a1 + m12 a2 + m13 a3 + (S v)_1
-    Y[0, 0] = a[0]
-    Y[0, 1] = a[0] * s2 * s2 + P12 * cs2
-    Y[0, 2] = a[0] * cs2 + P12 * d2
-    Y[0, 3] = a[0] * s23 * s23 + (P12 + P13) * cs23
-    Y[0, 4] = a[0] * cs23 + (P12 + P13) * d23
-    Y[0, 5] = 2.0 * a[0] * c2 * s23 + P12 * k6 + P13 * c2 * c23
-    Y[0, 6] = 2.0 * a[0] * c2 * c23 - P12 * k7 - P13 * c2 * s23
-    Y[0, 7] = a[1] * c2 - w22 * s2
-    Y[0, 8] = a[1] * s2 + w22 * c2
+    Y[0, 0] = a1
+    Y[0, 1] = a1 * s2 * s2 + P12 * cs2
+    Y[0, 2] = a1 * cs2 + P12 * d2
+    Y[0, 3] = a1 * s23 * s23 + (P12 + P13) * cs23
+    Y[0, 4] = a1 * cs23 + (P12 + P13) * d23
+    Y[0, 5] = 2.0 * a1 * c2 * s23 + P12 * k6 + P13 * c2 * c23
+    Y[0, 6] = 2.0 * a1 * c2 * c23 - P12 * k7 - P13 * c2 * s23
+    Y[0, 7] = a2 * c2 - w22 * s2
+    Y[0, 8] = a2 * s2 + w22 * c2
     Y[0, 9] = a23 * c23 - (w22 + W) * s23
     Y[0, 10] = a23 * s23 + (w22 + W) * c23
+    Y[0, 11] = 0.0; Y[0, 12] = 0.0; Y[0, 13] = 0.0; Y[0, 14] = 0.0
     # row 2: m12 a1 + m22 a2 + m23 a3 + (S v)_2 + g2
+    Y[1, 0] = 0.0
     Y[1, 1] = -w11 * cs2
     Y[1, 2] = -w11 * d2
     Y[1, 3] = -w11 * cs23
     Y[1, 4] = -w11 * d23
-    Y[1, 5] = (2.0 * a[1] + a[2]) * s3 - w11 * k6 + W * c3 + gl * s23
-    Y[1, 6] = (2.0 * a[1] + a[2]) * c3 + w11 * k7 - W * s3 + gl * c23
-    Y[1, 7] = a[0] * c2
-    Y[1, 8] = a[0] * s2
-    Y[1, 9] = a[0] * c23
-    Y[1, 10] = a[0] * s23
-    Y[1, 11] = a[1]
-    Y[1, 12] = a[2]
+    Y[1, 5] = (2.0 * a2 + a3) * s3 - w11 * k6 + W * c3 + gl * s23
+    Y[1, 6] = (2.0 * a2 + a3) * c3 + w11 * k7 - W * s3 + gl * c23
+    Y[1, 7] = a1 * c2
+    Y[1, 8] = a1 * s2
+    Y[1, 9] = a1 * c23
+    Y[1, 10] = a1 * s23
+    Y[1, 11] = a2
+    Y[1, 12] = a3
     Y[1, 13] = g0 * c2
     Y[1, 14] = g0 * s2
     # row 3: m13 a1 + m23 a2 + m33 a3 + (S v)_3 + g3
+    Y[2, 0] = 0.0; Y[2, 1] = 0.0; Y[2, 2] = 0.0
     Y[2, 3] = -w11 * cs23
     Y[2, 4] = -w11 * d23
-    Y[2, 5] = a[1] * s3 - w11 * c2 * c23 - w22 * c3 + gl * s23
-    Y[2, 6] = a[1] * c3 + w11 * c2 * s23 + w22 * s3 + gl * c23
-    Y[2, 9] = a[0] * c23
-    Y[2, 10] = a[0] * s23
+    Y[2, 5] = a2 * s3 - w11 * c2 * c23 - w22 * c3 + gl * s23
+    Y[2, 6] = a2 * c3 + w11 * c2 * s23 + w22 * s3 + gl * c23
+    Y[2, 7] = 0.0; Y[2, 8] = 0.0
+    Y[2, 9] = a1 * c23
+    Y[2, 10] = a1 * s23
+    Y[2, 11] = 0.0
     Y[2, 12] = a23
+    Y[2, 13] = 0.0; Y[2, 14] = 0.0
 
 
 @njit(**_JIT)
@@ -166,16 +222,13 @@ def solve_spd3(M, b, x):
 @njit(**_JIT)
 def forward_dynamics_into(th, q, qd, u, l2, g0, qdd, work33, work3):
     """qdd = M^{-1} (u - S qd - g) with the closed form; False if M is not PD."""
-    coriolis_into(th, q, qd, work33)
-    for i in range(3):
-        work3[i] = u[i] - (work33[i, 0] * qd[0] + work33[i, 1] * qd[1] + work33[i, 2] * qd[2])
-    # gravity (re-using work33 row storage is not safe; compute inline)
-    s2 = math.sin(q[1]); c2 = math.cos(q[1])
-    s23 = math.sin(q[1] + q[2]); c23 = math.cos(q[1] + q[2])
-    g3 = g0 * (th[6] * c23 + th[5] * s23) / l2
-    work3[1] -= g0 * (th[13] * c2 + th[14] * s2) + g3
-    work3[2] -= g3
-    mass_matrix_into(th, q, work33)
+    m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, q[1], q[2], qd[0], qd[1], qd[2], l2, g0)
+    work33[0, 0] = m11; work33[0, 1] = m12; work33[0, 2] = m13
+    work33[1, 0] = m12; work33[1, 1] = m22; work33[1, 2] = m23
+    work33[2, 0] = m13; work33[2, 1] = m23; work33[2, 2] = th[12]
+    work3[0] = u[0] - h1
+    work3[1] = u[1] - h2
+    work3[2] = u[2] - h3
     return solve_spd3(work33, work3, qdd)
 
 
@@ -208,12 +261,6 @@ def slotine_li_batch(Q, QD, V, A, l2, g0, out):
 
 @njit(**_JIT)
 def inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out):
-    """tau = Y(q, qd, qdd) theta for each state, without storing Y."""
-    Y = np.empty((3, 15))
+    """tau = M qdd + S qd + g for each state, without storing Y."""
     for n in range(Q.shape[0]):
-        slotine_li_into(Q[n], QD[n], QD[n], QDD[n], l2, g0, Y)
-        for i in range(3):
-            acc = 0.0
-            for j in range(15):
-                acc += Y[i, j] * th[j]
-            out[n, i] = acc
+        inverse_dynamics_into(th, Q[n], QD[n], QDD[n], l2, g0, out[n])

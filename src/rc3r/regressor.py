@@ -70,8 +70,9 @@ def regressor(q, qd, qdd, *, l2: float, g0: float = G0) -> np.ndarray:
 def inverse_dynamics(theta, q, qd, qdd, *, l2: float, g0: float = G0) -> np.ndarray:
     r"""Joint torques :math:`\tau = Y(q, \dot q, \ddot q)\,\theta` [N m], (3,) or (N, 3).
 
-    Evaluated in compiled code without materializing Y (the fast path benchmarked
-    against ``pinocchio.rnea`` by ``rc3r bench``).
+    Evaluated in compiled code as :math:`M\ddot q + S\dot q + g` from the same term
+    functions as :mod:`rc3r.model`, without materializing Y (the fast path benchmarked
+    against ``pinocchio.rnea`` by ``rc3r bench``; equal to ``regressor(...) @ theta``).
     """
     th = as_theta(theta)
     (Q, QD, QDD), single = as_states(q, qd, qdd)
