@@ -14,21 +14,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from _helpers import TOL, assert_close  # noqa: E402  (tests/ is on sys.path under pytest)
 from rc3r import model as mdl
 from rc3r.params import ArmParams, LinkParams, theta
 from rc3r.urdf import model_from_params  # make_urdf text -> Pinocchio, gravity (0, 0, -g0)
 
-TOL = 1e-9
 N_STATES = 50
 
 
-def assert_close(x, ref, tol=TOL):
-    """max|x - ref| <= tol * max(1, max|ref|) (the verify-model relative error)."""
-    x, ref = np.asarray(x, float), np.asarray(ref, float)
-    assert x.shape == ref.shape
-    err = np.max(np.abs(x - ref))
-    scale = max(1.0, float(np.max(np.abs(ref))))
-    assert err <= tol * scale, f"max abs err {err:.3e} > {tol:.0e} * {scale:.3g}"
 
 
 def states(rng, n=N_STATES):

@@ -14,12 +14,12 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from _helpers import TOL, assert_close  # noqa: E402  (tests/ is on sys.path under pytest)
 from rc3r import model as mdl
 from rc3r import regressor as reg
 from rc3r.params import ArmParams, LinkParams, physical_issues, theta
 from rc3r.urdf import model_from_params  # make_urdf text -> Pinocchio, gravity (0, 0, -g0)
 
-TOL = 1e-9
 
 #: Reproducible property tests: a fixed example sequence (derandomize), no
 #: example database written to disk, no per-example deadline (numba/pinocchio
@@ -28,13 +28,6 @@ PROPERTY = settings(max_examples=25, deadline=None, derandomize=True, database=N
                     suppress_health_check=[HealthCheck.too_slow])
 
 
-def assert_close(x, ref, tol=TOL):
-    """max|x - ref| <= tol * max(1, max|ref|) (the verify-model relative error)."""
-    x, ref = np.asarray(x, float), np.asarray(ref, float)
-    assert x.shape == ref.shape
-    err = np.max(np.abs(x - ref))
-    scale = max(1.0, float(np.max(np.abs(ref))))
-    assert err <= tol * scale, f"max abs err {err:.3e} > {tol:.0e} * {scale:.3g}"
 
 
 def random_states(rng, n):
