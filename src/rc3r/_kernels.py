@@ -126,20 +126,19 @@ def inverse_dynamics_into(th, q, qd, qdd, l2, g0, tau):
     tau[2] = m13 * qdd[0] + m23 * qdd[1] + th[12] * qdd[2] + h3
 
 
-@njit(**_JIT)
-def slotine_li_into(q, qd, v, a, l2, g0, Y):
+@njit(**_INLINE)
+def slotine_li_scalars(q2, q3, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3, l2, g0, Y):
     """Y(q, qd, v, a) (3x15) with ``Y theta = M a + S(q, qd) v + g`` (derived, docs/model.md).
 
-    Every entry is written exactly once (structural zeros included).
+    Scalar arguments (q1 does not enter), so compiled loops pass ``Q[n, 1]`` etc. without
+    creating (reference-counted) row views; every entry of ``Y`` is written exactly once.
     """
-    s2, c2, s3, c3, s23, c23 = _trig(q[1], q[2])
-    qd1 = qd[0]; qd2 = qd[1]; qd3 = qd[2]
-    a1 = a[0]; a2 = a[1]; a3 = a[2]
-    P12 = v[0] * qd2 + qd1 * v[1]
-    P13 = v[0] * qd3 + qd1 * v[2]
-    W = qd3 * v[1] + (qd2 + qd3) * v[2]
-    w11 = qd1 * v[0]
-    w22 = qd2 * v[1]
+    s2, c2, s3, c3, s23, c23 = _trig(q2, q3)
+    P12 = v1 * qd2 + qd1 * v2
+    P13 = v1 * qd3 + qd1 * v3
+    W = qd3 * v2 + (qd2 + qd3) * v3
+    w11 = qd1 * v1
+    w22 = qd2 * v2
     cs2 = c2 * s2; d2 = 0.5 * (c2 * c2 - s2 * s2)
     cs23 = c23 * s23; d23 = 0.5 * (c23 * c23 - s23 * s23)
     k6 = c2 * c23 - s2 * s23      # cos(2 q2 + q3)
@@ -187,6 +186,12 @@ def slotine_li_into(q, qd, v, a, l2, g0, Y):
     Y[2, 11] = 0.0
     Y[2, 12] = a23
     Y[2, 13] = 0.0; Y[2, 14] = 0.0
+
+
+@njit(**_JIT)
+def slotine_li_into(q, qd, v, a, l2, g0, Y):
+    """:func:`slotine_li_scalars` for (3,) arrays ``q, qd, v, a``."""
+    slotine_li_scalars(q[1], q[2], qd[0], qd[1], qd[2], v[0], v[1], v[2], a[0], a[1], a[2], l2, g0, Y)
 
 
 @njit(**_JIT)
@@ -256,11 +261,17 @@ def gravity_batch(th, Q, l2, g0, out):
 @njit(**_JIT)
 def slotine_li_batch(Q, QD, V, A, l2, g0, out):
     for n in range(Q.shape[0]):
-        slotine_li_into(Q[n], QD[n], V[n], A[n], l2, g0, out[n])
+        slotine_li_scalars(Q[n, 1], Q[n, 2], QD[n, 0], QD[n, 1], QD[n, 2], V[n, 0], V[n, 1], V[n, 2],
+                           A[n, 0], A[n, 1], A[n, 2], l2, g0, out[n])
 
 
 @njit(**_JIT)
 def inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out):
     """tau = M qdd + S qd + g for each state, without storing Y."""
     for n in range(Q.shape[0]):
-        inverse_dynamics_into(th, Q[n], QD[n], QDD[n], l2, g0, out[n])
+        m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, Q[n, 1], Q[n, 2], QD[n, 0], QD[n, 1],
+                                                              QD[n, 2], l2, g0)
+        a1 = QDD[n, 0]; a2 = QDD[n, 1]; a3 = QDD[n, 2]
+        out[n, 0] = m11 * a1 + m12 * a2 + m13 * a3 + h1
+        out[n, 1] = m12 * a1 + m22 * a2 + m23 * a3 + h2
+        out[n, 2] = m13 * a1 + m23 * a2 + th[12] * a3 + h3

@@ -91,11 +91,12 @@ _JIT = dict(cache=True, nogil=True)
 
 @njit(**_JIT)
 def _slotine_li_in_loop(th, Q, QD, V, A, l2, g0, out):
-    """Y(q, qd, v, a) by the library kernel into one reused 3x15 (as the controllers do);
-    ``out[n] = Y theta`` keeps the result alive and checkable."""
+    """Y(q, qd, v, a) by the library kernel (scalar arguments, no row views) into one
+    reused 3x15; ``out[n] = Y theta`` keeps the result alive and checkable."""
     Y = np.empty((3, 15))
     for n in range(Q.shape[0]):
-        K.slotine_li_into(Q[n], QD[n], V[n], A[n], l2, g0, Y)
+        K.slotine_li_scalars(Q[n, 1], Q[n, 2], QD[n, 0], QD[n, 1], QD[n, 2], V[n, 0], V[n, 1], V[n, 2],
+                             A[n, 0], A[n, 1], A[n, 2], l2, g0, Y)
         for i in range(3):
             acc = 0.0
             for j in range(15):

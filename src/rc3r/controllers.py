@@ -58,10 +58,10 @@ def control_into(law, cp, q, qd, z, ref, l2, g0, u, zdot, Y, xi):
         Kp = cp[15:18]
         Kd = cp[18:21]
         if law == FBL:
-            ar = np.empty(3)
-            for i in range(3):
-                ar[i] = ref[2, i] + Kd[i] * (ref[1, i] - qd[i]) + Kp[i] * (ref[0, i] - q[i])
-            K.slotine_li_into(q, qd, qd, ar, l2, g0, Y)
+            ar1 = ref[2, 0] + Kd[0] * (ref[1, 0] - qd[0]) + Kp[0] * (ref[0, 0] - q[0])
+            ar2 = ref[2, 1] + Kd[1] * (ref[1, 1] - qd[1]) + Kp[1] * (ref[0, 1] - q[1])
+            ar3 = ref[2, 2] + Kd[2] * (ref[1, 2] - qd[2]) + Kp[2] * (ref[0, 2] - q[2])
+            K.slotine_li_scalars(q[1], q[2], qd[0], qd[1], qd[2], qd[0], qd[1], qd[2], ar1, ar2, ar3, l2, g0, Y)
             for i in range(3):
                 acc = 0.0
                 for j in range(15):
@@ -74,19 +74,17 @@ def control_into(law, cp, q, qd, z, ref, l2, g0, u, zdot, Y, xi):
         return 0.0
     Kg = cp[15:18]
     Lam = cp[18:21]
-    v = np.empty(3)
-    a = np.empty(3)
-    r = np.empty(3)
-    for i in range(3):
-        e = q[i] - ref[0, i]
-        ed = qd[i] - ref[1, i]
-        v[i] = ref[1, i] - Lam[i] * e
-        a[i] = ref[2, i] - Lam[i] * ed
-        r[i] = ed + Lam[i] * e
-    K.slotine_li_into(q, qd, v, a, l2, g0, Y)
+    # v = qd_d - Lambda e, a = qdd_d - Lambda e_dot, r = qd - v = e_dot + Lambda e
+    e1 = q[0] - ref[0, 0]; e2 = q[1] - ref[0, 1]; e3 = q[2] - ref[0, 2]
+    ed1 = qd[0] - ref[1, 0]; ed2 = qd[1] - ref[1, 1]; ed3 = qd[2] - ref[1, 2]
+    r1 = ed1 + Lam[0] * e1; r2 = ed2 + Lam[1] * e2; r3 = ed3 + Lam[2] * e3
+    K.slotine_li_scalars(q[1], q[2], qd[0], qd[1], qd[2],
+                         ref[1, 0] - Lam[0] * e1, ref[1, 1] - Lam[1] * e2, ref[1, 2] - Lam[2] * e3,
+                         ref[2, 0] - Lam[0] * ed1, ref[2, 1] - Lam[1] * ed2, ref[2, 2] - Lam[2] * ed3,
+                         l2, g0, Y)
     nrm2 = 0.0
     for j in range(15):
-        xi[j] = Y[0, j] * r[0] + Y[1, j] * r[1] + Y[2, j] * r[2]
+        xi[j] = Y[0, j] * r1 + Y[1, j] * r2 + Y[2, j] * r3
         nrm2 += xi[j] * xi[j]
     nrm = np.sqrt(nrm2)
     # xi <- effective parameter vector used in u = Y theta_eff - K r
@@ -103,11 +101,14 @@ def control_into(law, cp, q, qd, z, ref, l2, g0, u, zdot, Y, xi):
         for j in range(15):
             zdot[j] = -cp[21 + j] * xi[j]
             xi[j] = z[j]
+    u[0] = -Kg[0] * r1
+    u[1] = -Kg[1] * r2
+    u[2] = -Kg[2] * r3
     for i in range(3):
-        acc = -Kg[i] * r[i]
+        acc = 0.0
         for j in range(15):
             acc += Y[i, j] * xi[j]
-        u[i] = acc
+        u[i] += acc
     return nrm
 
 
