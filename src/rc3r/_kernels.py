@@ -117,15 +117,6 @@ def _dynamics_terms(th, q2, q3, qd1, qd2, qd3, l2, g0):
     return m11, m12, m13, m22, m23, c1, c2_ + g2, c3_ + g3
 
 
-@njit(**_JIT)
-def inverse_dynamics_into(th, q, qd, qdd, l2, g0, tau):
-    """tau = M(q) qdd + S(q, qd) qd + g(q) directly from the terms (no Y materialized)."""
-    m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, q[1], q[2], qd[0], qd[1], qd[2], l2, g0)
-    tau[0] = m11 * qdd[0] + m12 * qdd[1] + m13 * qdd[2] + h1
-    tau[1] = m12 * qdd[0] + m22 * qdd[1] + m23 * qdd[2] + h2
-    tau[2] = m13 * qdd[0] + m23 * qdd[1] + th[12] * qdd[2] + h3
-
-
 @njit(**_INLINE)
 def slotine_li_scalars(q2, q3, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3, l2, g0, Y):
     """Y(q, qd, v, a) (3x15) with ``Y theta = M a + S(q, qd) v + g`` (derived, docs/model.md).
@@ -187,11 +178,6 @@ def slotine_li_scalars(q2, q3, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3, l2, g0, Y)
     Y[2, 12] = a23
     Y[2, 13] = 0.0; Y[2, 14] = 0.0
 
-
-@njit(**_JIT)
-def slotine_li_into(q, qd, v, a, l2, g0, Y):
-    """:func:`slotine_li_scalars` for (3,) arrays ``q, qd, v, a``."""
-    slotine_li_scalars(q[1], q[2], qd[0], qd[1], qd[2], v[0], v[1], v[2], a[0], a[1], a[2], l2, g0, Y)
 
 
 @njit(**_JIT)

@@ -29,7 +29,6 @@ Table 1 gives exactly Table 2 (``tests/test_params.py``).
 """
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass, field, replace
 from importlib import resources
@@ -303,12 +302,3 @@ def require_simulable(p: ArmParams) -> None:
     for issue in physical_issues(p):
         if "triangle" not in issue:
             raise ParameterError(issue)
-
-
-def isclose_params(a: ArmParams, b: ArmParams, tol: float = 1e-9) -> bool:
-    """True if the two parameter sets agree to ``tol`` (absolute) in every number."""
-    return (
-        math.isclose(a.g0, b.g0, abs_tol=tol)
-        and np.allclose(a.to_vector(), b.to_vector(), rtol=0, atol=tol)
-        and np.allclose(a.lengths, b.lengths, rtol=0, atol=tol)
-    )

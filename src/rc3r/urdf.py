@@ -28,7 +28,7 @@ import numpy as np
 
 from .errors import UrdfError
 from .io import atomic_write_text
-from .params import G0, ArmParams, LinkParams, require_simulable  # noqa: F401  (re-export)
+from .params import G0, ArmParams, LinkParams, require_simulable
 
 __all__ = [
     "dh_fixed",
