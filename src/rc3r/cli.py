@@ -8,6 +8,7 @@ traceback. Each command's work lives in its own module; this file only parses.
 from __future__ import annotations
 
 import argparse
+import importlib
 import math
 import os
 import sys
@@ -94,30 +95,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: command -> (module, function); modules are imported only when their command runs.
+_COMMANDS = {
+    "verify-model": ("verify", "cmd_verify_model"),
+    "make-urdf": ("urdf", "cmd_make_urdf"),
+    "bounds": ("uncertainty", "cmd_bounds"),
+    "run": ("scenarios", "cmd_run"),
+    "paper": ("scenarios", "cmd_paper"),
+    "sweep-eps": ("scenarios", "cmd_sweep_eps"),
+    "bench": ("bench", "cmd_bench"),
+}
+
+
 def _dispatch(args) -> int:
-    cmd = args.command
-    if cmd == "verify-model":
-        from .verify import cmd_verify_model
-        return cmd_verify_model(args)
-    if cmd == "make-urdf":
-        from .urdf import cmd_make_urdf
-        return cmd_make_urdf(args)
-    if cmd == "bounds":
-        from .uncertainty import cmd_bounds
-        return cmd_bounds(args)
-    if cmd == "run":
-        from .scenarios import cmd_run
-        return cmd_run(args)
-    if cmd == "paper":
-        from .scenarios import cmd_paper
-        return cmd_paper(args)
-    if cmd == "sweep-eps":
-        from .scenarios import cmd_sweep_eps
-        return cmd_sweep_eps(args)
-    if cmd == "bench":
-        from .bench import cmd_bench
-        return cmd_bench(args)
-    raise AssertionError(cmd)  # argparse restricts the choices
+    module, func = _COMMANDS[args.command]  # argparse restricts the choices
+    return getattr(importlib.import_module(f".{module}", __package__), func)(args)
 
 
 def main(argv=None) -> int:

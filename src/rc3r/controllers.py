@@ -126,6 +126,13 @@ def _positive(name, x, n=3) -> np.ndarray:
     return arr
 
 
+def _nonnegative(name, x, n) -> np.ndarray:
+    arr = _vec(name, x, n)
+    if np.any(arr < 0):
+        raise ParameterError(f"{name} must be >= 0, got {arr.tolist()}")
+    return arr
+
+
 @runtime_checkable
 class Controller(Protocol):
     """What the simulator needs from a controller."""
@@ -196,7 +203,20 @@ class PDGravity(FeedbackLinearization):
 
 
 @dataclass(frozen=True, eq=False)
-class Robust(_Base):
+class _SlidingBase(_Base):
+    """Laws built on r = e_dot + Lambda e: ``K`` [N m s/rad] and ``Lambda`` [1/s], diagonal, > 0."""
+
+    K: np.ndarray = field(default_factory=lambda: np.full(3, 100.0))
+    Lambda: np.ndarray = field(default_factory=lambda: np.full(3, 50.0))
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "K", _positive("K", self.K))
+        object.__setattr__(self, "Lambda", _positive("Lambda", self.Lambda))
+
+
+@dataclass(frozen=True, eq=False)
+class Robust(_SlidingBase):
     """Spong's robust law, eq. (3)-(6): ``K`` [N m s/rad], ``Lambda`` [1/s], ``rho``, ``eps``.
 
     Paper: K = 100, Lambda = 50, rho = 186.8129, eps = 0.5 (and 0.05).
@@ -204,8 +224,6 @@ class Robust(_Base):
     ``(rho / eps) Y Y^T`` (~1e6 here): stiff; see docs/control.md.
     """
 
-    K: np.ndarray = field(default_factory=lambda: np.full(3, 100.0))
-    Lambda: np.ndarray = field(default_factory=lambda: np.full(3, 50.0))
     rho: float = 186.8129
     eps: float = 0.5
     name = "robust"
@@ -213,12 +231,7 @@ class Robust(_Base):
 
     def __post_init__(self):
         super().__post_init__()
-        object.__setattr__(self, "K", _positive("K", self.K))
-        object.__setattr__(self, "Lambda", _positive("Lambda", self.Lambda))
-        rho = float(_vec("rho", self.rho, 1)[0])
-        if rho < 0:
-            raise ParameterError(f"rho must be >= 0, got {rho}")
-        object.__setattr__(self, "rho", rho)
+        object.__setattr__(self, "rho", float(_nonnegative("rho", self.rho, 1)[0]))
         object.__setattr__(self, "eps", float(_positive("eps", self.eps, 1)[0]))
 
     def pack(self) -> np.ndarray:
@@ -226,11 +239,9 @@ class Robust(_Base):
 
 
 @dataclass(frozen=True, eq=False)
-class RobustPerCoefficient(_Base):
+class RobustPerCoefficient(_SlidingBase):
     """Eq. (7): per-coefficient bounds ``rho_i`` (15,) and boundary layers ``eps_i`` (15,)."""
 
-    K: np.ndarray = field(default_factory=lambda: np.full(3, 100.0))
-    Lambda: np.ndarray = field(default_factory=lambda: np.full(3, 50.0))
     rho_i: np.ndarray = field(default_factory=lambda: np.zeros(15))
     eps_i: np.ndarray = field(default_factory=lambda: np.full(15, 0.5))
     name = "robust-coeff"
@@ -238,12 +249,7 @@ class RobustPerCoefficient(_Base):
 
     def __post_init__(self):
         super().__post_init__()
-        object.__setattr__(self, "K", _positive("K", self.K))
-        object.__setattr__(self, "Lambda", _positive("Lambda", self.Lambda))
-        rho_i = _vec("rho_i", self.rho_i, 15)
-        if np.any(rho_i < 0):
-            raise ParameterError(f"rho_i must be >= 0, got {rho_i.tolist()}")
-        object.__setattr__(self, "rho_i", rho_i)
+        object.__setattr__(self, "rho_i", _nonnegative("rho_i", self.rho_i, 15))
         object.__setattr__(self, "eps_i", _positive("eps_i", self.eps_i, 15))
 
     def pack(self) -> np.ndarray:
@@ -251,19 +257,15 @@ class RobustPerCoefficient(_Base):
 
 
 @dataclass(frozen=True, eq=False)
-class Adaptive(_Base):
+class Adaptive(_SlidingBase):
     """Slotine-Li adaptive law; ``theta`` is the initial estimate, ``Gamma`` (15,) the adaptation gain."""
 
-    K: np.ndarray = field(default_factory=lambda: np.full(3, 100.0))
-    Lambda: np.ndarray = field(default_factory=lambda: np.full(3, 50.0))
     Gamma: np.ndarray = field(default_factory=lambda: np.full(15, 1.0))
     name = "adaptive"
     law = ADAPTIVE
 
     def __post_init__(self):
         super().__post_init__()
-        object.__setattr__(self, "K", _positive("K", self.K))
-        object.__setattr__(self, "Lambda", _positive("Lambda", self.Lambda))
         object.__setattr__(self, "Gamma", _positive("Gamma", self.Gamma, 15))
 
     def pack(self) -> np.ndarray:

@@ -9,10 +9,13 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import tomllib
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig"]
+from .errors import ConfigError
+
+__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml"]
 
 
 @contextmanager
@@ -48,3 +51,23 @@ def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format=kwargs.pop("format", "png"), **kwargs)
     return Path(path)
+
+
+def read_toml(path: str | Path, what: str) -> dict:
+    """Parse the TOML file ``path``; one-line :class:`ConfigError` naming ``what`` otherwise.
+
+    ``what`` names the file in messages (``"parameter file"``, ``"config file"`` ...).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise ConfigError(f"{what} not found: {path}") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{what} path is a directory: {path}") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not a text file: {exc}") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: malformed TOML: {exc}") from None

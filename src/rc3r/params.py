@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError, ParameterError
+from .io import read_toml
 
 __all__ = [
     "G0",
@@ -203,14 +204,7 @@ def load_params(path: str | Path) -> ArmParams:
     ParameterError
         Non-finite numbers or non-positive lengths.
     """
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ConfigError(f"parameter file not found: {path}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{path}: malformed TOML: {exc}") from None
-    return _params_from_mapping(data, str(path))
+    return _params_from_mapping(read_toml(path, "parameter file"), str(path))
 
 
 def table1() -> ArmParams:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import sys
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,7 +22,7 @@ import numpy as np
 
 from .controllers import Adaptive, FeedbackLinearization, PDGravity, Robust, RobustPerCoefficient
 from .errors import ConfigError, ParameterError
-from .io import atomic_path, atomic_write_json, atomic_write_text
+from .io import atomic_path, atomic_write_json, atomic_write_text, read_toml
 from .metrics import CHATTERING_DEFINITION, run_metrics
 from .params import table1
 from .plant import Plant
@@ -67,15 +66,7 @@ class RunSpec:
 
 
 def _load_config(path) -> dict:
-    if path is None:
-        return {}
-    p = Path(path)
-    try:
-        return tomllib.loads(p.read_text())
-    except FileNotFoundError:
-        raise ConfigError(f"config file not found: {p}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"{p}: malformed TOML: {exc}") from None
+    return {} if path is None else read_toml(path, "config file")
 
 
 def _plant(spec: str | None, cfg: dict, seed: int):
@@ -101,6 +92,13 @@ def _model(kind: str, plant: Plant, perturbed: bool, cfg: dict) -> tuple[np.ndar
 
     nominal = table1()
     paper = paper_bounds(nominal, paper_box())
+    cert_cache = []
+
+    def cert():  # exact ranges over the paper's box, computed at most once
+        if not cert_cache:
+            cert_cache.append(certified_bounds(nominal, paper_box()))
+        return cert_cache[0]
+
     which = cfg.get("theta", "paper" if perturbed else "plant")
     if isinstance(which, list):
         th = np.asarray(which, dtype=float)
@@ -112,18 +110,17 @@ def _model(kind: str, plant: Plant, perturbed: bool, cfg: dict) -> tuple[np.ndar
     elif which == "paper":
         th, desc = paper.theta0, "theta_0 of Table 3 (paper method)"
     elif which == "certified":
-        th, desc = certified_bounds(nominal, paper_box()).theta0, "theta_0 = centre of exact ranges"
+        th, desc = cert().theta0, "theta_0 = centre of exact ranges"
     else:
         raise ConfigError(f"model theta must be 'plant', 'paper', 'certified' or 15 numbers, got {which!r}")
     rho_cfg = cfg.get("rho", "paper")
     rho_i = None
     if kind == "robust-coeff":
-        cert = certified_bounds(nominal, paper_box())
-        _, rho_i = certified_radius(cert, th)
+        _, rho_i = certified_radius(cert(), th)
     if rho_cfg == "paper":
         rho = paper.rho
     elif rho_cfg == "certified":
-        rho, _ = certified_radius(certified_bounds(nominal, paper_box()), th)
+        rho, _ = certified_radius(cert(), th)
     else:
         try:
             rho = float(rho_cfg)

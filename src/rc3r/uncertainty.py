@@ -60,6 +60,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError, ParameterError
+from .io import read_toml
 from .params import INERTIA_KEYS, STD_NAMES, ArmParams, require_simulable, theta, theta_from_vector
 
 __all__ = [
@@ -303,19 +304,7 @@ def load_box(path: str | Path) -> Box:
     ParameterError
         Non-finite numbers or an empty interval (``lower > upper``).
     """
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise ConfigError(f"box file not found: {path}") from None
-    except IsADirectoryError:
-        raise ConfigError(f"box path is a directory: {path}") from None
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{path}: not a text file: {exc}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: malformed TOML: {exc}") from None
+    data = read_toml(path, "box file")
     return parse_box(data, str(path))
 
 
