@@ -273,9 +273,14 @@ class _Loop:
         return np.concatenate([self.plant_rhs(x, u), zdot])
 
 
+def _margins(x, opt) -> tuple[float, float]:
+    """Distance of the state to its |q| and |qd| bounds (negative = past it)."""
+    return opt.q_max - np.max(np.abs(x[0:3])), opt.qd_max - np.max(np.abs(x[3:6]))
+
+
 def _bound_event(opt):
     def event(t, x):
-        return min(opt.q_max - np.max(np.abs(x[0:3])), opt.qd_max - np.max(np.abs(x[3:6])))
+        return min(_margins(x, opt))
 
     event.terminal = True
     return event
@@ -306,8 +311,8 @@ def _reference(plant, controller, trajectory, opt, x0):
                 break
         t_end = float(sol.t[m - 1]) if m else 0.0
         if status == E.OK and sol.status == 1:  # terminal bound event
-            status, t_end = E.QDBOUND if np.max(np.abs(sol.y_events[0][0][3:6])) >= opt.qd_max * (1 - 1e-9) \
-                else E.QBOUND, float(sol.t_events[0][0])
+            q_margin, qd_margin = _margins(sol.y_events[0][0], opt)
+            status, t_end = (E.QDBOUND if qd_margin <= q_margin else E.QBOUND), float(sol.t_events[0][0])
         elif status == E.OK and sol.status < 0:
             status, t_end = E.HMIN, float(sol.t[-1]) if sol.t.size else 0.0
         return _result(plant, controller, trajectory, opt, sol.t[:m], X[:m], U[:m], R[:m], yn[:m],
