@@ -1,23 +1,27 @@
-"""Figures (PNG, matplotlib Agg backend), written atomically."""
+"""Figures (PNG), written atomically.
+
+Figures are built as :class:`matplotlib.figure.Figure` objects, not through
+``pyplot``: importing this module never changes the user's backend (a notebook
+keeps its inline plots) and nothing is left open in pyplot's figure manager.
+"""
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .io import atomic_savefig  # noqa: E402
+from .io import atomic_savefig
 
 __all__ = ["plot_run", "plot_error_comparison", "plot_tradeoff"]
 
 
 def plot_run(res, path: str | Path, title: str) -> Path:
     """Joint errors (left) and torques (right), one row per joint, as the paper's figures 3-7."""
-    fig, axes = plt.subplots(3, 2, figsize=(11, 7), sharex=True, constrained_layout=True)
-    for j in range(3):
+    n = res.q.shape[1]
+    fig = Figure(figsize=(11, 1.2 + 1.95 * n), constrained_layout=True)
+    axes = np.atleast_2d(fig.subplots(n, 2, sharex=True))
+    for j in range(n):
         axes[j, 0].plot(res.t, res.e[:, j], lw=0.9)
         axes[j, 0].set_ylabel(f"e{j + 1} [rad]")
         axes[j, 0].ticklabel_format(axis="y", style="sci", scilimits=(-2, 2))
@@ -25,15 +29,13 @@ def plot_run(res, path: str | Path, title: str) -> Path:
         axes[j, 1].set_ylabel(f"u{j + 1} [N m]")
         for ax in axes[j]:
             ax.grid(alpha=0.3)
-    axes[2, 0].set_xlabel("t [s]")
-    axes[2, 1].set_xlabel("t [s]")
+    axes[-1, 0].set_xlabel("t [s]")
+    axes[-1, 1].set_xlabel("t [s]")
     axes[0, 0].set_title("tracking error q - q_d")
     axes[0, 1].set_title("joint torque u")
     status = "" if res.ok else f"  [{res.message}]"
     fig.suptitle(f"{title} ({res.mode}{'' if res.options.rate is None else f' {res.options.rate:g} Hz'}){status}")
-    path = atomic_savefig(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return atomic_savefig(fig, path, dpi=110)
 
 
 def _finish(fig, ax, path, title, xlabel, ylabel) -> Path:
@@ -43,14 +45,13 @@ def _finish(fig, ax, path, title, xlabel, ylabel) -> Path:
     ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    path = atomic_savefig(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return atomic_savefig(fig, path, dpi=110)
 
 
 def plot_error_comparison(runs: dict, path: str | Path, title: str) -> Path:
     """max_j |e_j(t)| of several runs on a log scale."""
-    fig, ax = plt.subplots(figsize=(9, 4.5), constrained_layout=True)
+    fig = Figure(figsize=(9, 4.5), constrained_layout=True)
+    ax = fig.subplots()
     for name, res in runs.items():
         ax.semilogy(res.t, np.maximum(np.abs(res.e).max(axis=1), 1e-16), lw=0.9, label=name)
     return _finish(fig, ax, path, title, "t [s]", "max_j |e_j| [rad]")
@@ -58,7 +59,8 @@ def plot_error_comparison(runs: dict, path: str | Path, title: str) -> Path:
 
 def plot_tradeoff(rows: list[dict], path: str | Path, title: str) -> Path:
     """Final error bound vs chattering, one curve per mode, points labelled by eps."""
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    fig = Figure(figsize=(8, 5), constrained_layout=True)
+    ax = fig.subplots()
     for mode in sorted({r["mode_label"] for r in rows}):
         pts = [r for r in rows if r["mode_label"] == mode and r["status"] == "ok"]
         if not pts:

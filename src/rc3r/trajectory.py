@@ -3,7 +3,8 @@ r"""Desired joint trajectories :math:`q_d(t)` with their first two derivatives.
 Two kinds, both C2 as the robust law requires (section 3.3):
 
 * :class:`Sines` -- :math:`q_{d,i}(t) = c_i + \sum_k A_{ik} \sin(\omega_{ik} t + \phi_{ik})`.
-  The paper's trajectory :math:`(\sin t, 5\cos t, \sin t)` is :func:`paper_trajectory`.
+  (The paper's trajectory :math:`(\sin t, 5\cos t, \sin t)` lives with the paper's
+  arm, :func:`rc3r.robots.rr3.paper.paper_trajectory`.)
 * :class:`Quintic` -- rest-to-rest quintic segments through waypoints
   (:math:`s(\tau) = 10\tau^3 - 15\tau^4 + 6\tau^5`), holding the last waypoint.
 
@@ -21,21 +22,22 @@ from numba import njit
 
 from .errors import ConfigError
 
-__all__ = ["Sines", "Quintic", "paper_trajectory", "trajectory_from_config", "reference_into"]
+__all__ = ["Trajectory", "Sines", "Quintic", "trajectory_from_config", "reference_into"]
 
 _SINES, _QUINTIC = 0.0, 1.0
 
 
 @njit(cache=True, nogil=True)
 def reference_into(tp, t, ref):
-    """Fill ``ref`` (3, 3) with rows q_d(t), qd_d(t), qdd_d(t) from packed ``tp``."""
-    if tp[0] == 0.0:  # sines: [0, K, c(3), then per joint K x (A, w, phi)]
+    """Fill ``ref`` (3, n) with rows q_d(t), qd_d(t), qdd_d(t) from packed ``tp``."""
+    n = ref.shape[1]
+    if tp[0] == 0.0:  # sines: [0, K, c(n), then per joint K x (A, w, phi)]
         K = int(tp[1])
-        for i in range(3):
+        for i in range(n):
             q = tp[2 + i]
             qd = 0.0
             qdd = 0.0
-            base = 5 + i * K * 3
+            base = 2 + n + i * K * 3
             for k in range(K):
                 A = tp[base + 3 * k]
                 w = tp[base + 3 * k + 1]
@@ -48,7 +50,7 @@ def reference_into(tp, t, ref):
             ref[0, i] = q
             ref[1, i] = qd
             ref[2, i] = qdd
-    else:  # quintic: [1, nseg, durations(nseg), waypoints((nseg+1) x 3)]
+    else:  # quintic: [1, nseg, durations(nseg), waypoints((nseg+1) x n)]
         nseg = int(tp[1])
         t0 = 0.0
         seg = -1
@@ -58,8 +60,8 @@ def reference_into(tp, t, ref):
                 break
             t0 += tp[2 + k]
         if seg < 0:  # past the end: hold the last waypoint
-            wp = 2 + nseg + 3 * nseg
-            for i in range(3):
+            wp = 2 + nseg + n * nseg
+            for i in range(n):
                 ref[0, i] = tp[wp + i]
                 ref[1, i] = 0.0
                 ref[2, i] = 0.0
@@ -69,23 +71,30 @@ def reference_into(tp, t, ref):
         s = tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau)
         ds = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / T
         dds = 60.0 * tau * (1.0 - tau) * (1.0 - 2.0 * tau) / (T * T)
-        a = 2 + nseg + 3 * seg
-        for i in range(3):
-            d = tp[a + 3 + i] - tp[a + i]
+        a = 2 + nseg + n * seg
+        for i in range(n):
+            d = tp[a + n + i] - tp[a + i]
             ref[0, i] = tp[a + i] + d * s
             ref[1, i] = d * ds
             ref[2, i] = d * dds
 
 
-class _Trajectory:
+class Trajectory:
+    """Base of the trajectory kinds: ``n`` joints, :meth:`pack`, :meth:`evaluate`, :meth:`describe`."""
+
+    n: int = 0
+
     def pack(self) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def describe(self) -> str:  # pragma: no cover - abstract
+        raise NotImplementedError
+
     def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(q_d, qd_d, qdd_d)`` at times ``t`` (scalar -> (3,), array (N,) -> (N, 3))."""
+        """``(q_d, qd_d, qdd_d)`` at times ``t`` (scalar -> (n,), array (N,) -> (N, n))."""
         tp = self.pack()
         ts = np.atleast_1d(np.asarray(t, dtype=float))
-        out = np.empty((ts.size, 3, 3))
+        out = np.empty((ts.size, 3, self.n))
         for n, tn in enumerate(ts):
             reference_into(tp, float(tn), out[n])
         if np.ndim(t) == 0:
@@ -94,67 +103,75 @@ class _Trajectory:
 
 
 @dataclass(frozen=True)
-class Sines(_Trajectory):
+class Sines(Trajectory):
     """Sum of sines per joint.
 
     Attributes
     ----------
-    offset : tuple of 3 float
-        Constant term :math:`c_i` [rad].
+    offset : tuple of n float
+        Constant term :math:`c_i` [rad]; its length is the number of joints.
     terms : tuple of (joint, amplitude [rad], omega [rad/s], phase [rad])
         ``joint`` is 1-based.
     """
 
-    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    offset: tuple[float, ...] = (0.0, 0.0, 0.0)
     terms: tuple[tuple[int, float, float, float], ...] = ()
 
     def __post_init__(self):
+        off = np.asarray(self.offset, dtype=float)
+        if off.ndim != 1 or off.size == 0:
+            raise ConfigError(f"trajectory offset must be one number per joint, got shape {off.shape}")
+        n = off.size
         for term in self.terms:
-            if len(term) != 4 or int(term[0]) not in (1, 2, 3):
-                raise ConfigError(f"sine term must be (joint 1..3, A, omega, phase), got {term}")
-        values = np.concatenate([np.asarray(self.offset, float).ravel()]
-                                + [np.asarray(t[1:], float) for t in self.terms])
-        if np.asarray(self.offset).shape != (3,) or not np.all(np.isfinite(values)):
-            raise ConfigError("trajectory offset must be 3 finite numbers and terms finite")
+            if len(term) != 4 or not 1 <= int(term[0]) <= n:
+                raise ConfigError(f"sine term must be (joint 1..{n}, A, omega, phase), got {term}")
+        values = np.concatenate([off] + [np.asarray(t[1:], float) for t in self.terms])
+        if not np.all(np.isfinite(values)):
+            raise ConfigError("trajectory offset and terms must be finite")
+
+    @property
+    def n(self) -> int:
+        return len(self.offset)
 
     def pack(self) -> np.ndarray:
-        per_joint = [[t[1:] for t in self.terms if int(t[0]) == j] for j in (1, 2, 3)]
+        n = self.n
+        per_joint = [[t[1:] for t in self.terms if int(t[0]) == j] for j in range(1, n + 1)]
         K = max(1, max(len(p) for p in per_joint))
-        tp = np.zeros(5 + 9 * K)
+        tp = np.zeros(2 + n + 3 * n * K)
         tp[0], tp[1] = _SINES, K
-        tp[2:5] = self.offset
+        tp[2:2 + n] = self.offset
         for i, p in enumerate(per_joint):
             for k, (A, w, ph) in enumerate(p):
-                tp[5 + i * K * 3 + 3 * k: 5 + i * K * 3 + 3 * k + 3] = (A, w, ph)
+                base = 2 + n + i * K * 3 + 3 * k
+                tp[base: base + 3] = (A, w, ph)
         return tp
 
     def describe(self) -> str:
         return "sines " + "; ".join(f"q{j}: {A:g} sin({w:g} t + {ph:.4g})" for j, A, w, ph in self.terms)
 
 
-def paper_trajectory() -> Sines:
-    r"""The paper's :math:`q_d(t) = (\sin t,\ 5\cos t,\ \sin t)` (section 3.3)."""
-    return Sines((0.0, 0.0, 0.0), ((1, 1.0, 1.0, 0.0), (2, 5.0, 1.0, math.pi / 2), (3, 1.0, 1.0, 0.0)))
-
-
 @dataclass(frozen=True)
-class Quintic(_Trajectory):
+class Quintic(Trajectory):
     """Rest-to-rest quintic segments through ``waypoints`` (rad), each lasting ``durations`` (s)."""
 
-    waypoints: tuple[tuple[float, float, float], ...]
+    waypoints: tuple[tuple[float, ...], ...]
     durations: tuple[float, ...]
 
     def __post_init__(self):
         wp = np.asarray(self.waypoints, dtype=float)
         du = np.asarray(self.durations, dtype=float)
-        if wp.ndim != 2 or wp.shape[1] != 3 or wp.shape[0] < 2:
-            raise ConfigError(f"quintic needs >= 2 waypoints of 3 joints, got shape {wp.shape}")
+        if wp.ndim != 2 or wp.shape[0] < 2:
+            raise ConfigError(f"quintic needs >= 2 waypoints of n joints each, got shape {wp.shape}")
         if du.shape != (wp.shape[0] - 1,):
             raise ConfigError(f"quintic needs {wp.shape[0] - 1} durations, got {du.size}")
         if not (np.all(np.isfinite(wp)) and np.all(np.isfinite(du))):
             raise ConfigError("trajectory numbers must be finite")
         if np.any(du <= 0):
             raise ConfigError(f"quintic durations must be > 0, got {du.tolist()}")
+
+    @property
+    def n(self) -> int:
+        return len(self.waypoints[0])
 
     def pack(self) -> np.ndarray:
         n = len(self.durations)
@@ -165,18 +182,19 @@ class Quintic(_Trajectory):
         return f"quintic through {len(self.waypoints)} waypoints"
 
 
-def trajectory_from_config(cfg: dict) -> _Trajectory:
+def trajectory_from_config(cfg: dict, default: Trajectory) -> Trajectory:
     """Build a trajectory from a TOML table (``docs/control.md``).
 
-    ``kind = "paper"``; ``kind = "sines"`` with ``offset`` and ``terms = [[joint, A, omega,
+    ``kind = "paper"`` (or ``"default"``): ``default``, the robot's own reference
+    trajectory; ``kind = "sines"`` with ``offset`` and ``terms = [[joint, A, omega,
     phase], ...]``; ``kind = "quintic"`` with ``waypoints`` and ``durations``.
     """
     kind = cfg.get("kind", "paper")
     try:
-        if kind == "paper":
-            return paper_trajectory()
+        if kind in ("paper", "default"):
+            return default
         if kind == "sines":
-            return Sines(tuple(cfg.get("offset", (0.0, 0.0, 0.0))),
+            return Sines(tuple(cfg.get("offset", (0.0,) * default.n)),
                          tuple(tuple(t) for t in cfg["terms"]))
         if kind == "quintic":
             return Quintic(tuple(tuple(w) for w in cfg["waypoints"]), tuple(cfg["durations"]))

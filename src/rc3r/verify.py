@@ -1,12 +1,13 @@
-r"""Cross-check of the closed-form model against Pinocchio (``rc3r verify-model``).
+r"""Cross-check of a robot's model against Pinocchio (``rc3r verify-model``).
 
-:func:`verify_model` loads a URDF of the paper's 3R structure, computes the
-coefficients :math:`\theta(p)` of its parameters and compares every closed form
-of :mod:`rc3r.model` and :mod:`rc3r.regressor` with Pinocchio's rigid-body
-algorithms at random states. Each comparison is a :class:`Check`; a run passes
-iff every check passes. Physical-consistency problems of the parameters
-(:func:`rc3r.params.physical_issues`) are reported as warnings and never fail a
-run.
+:func:`verify_model` takes any :class:`~rc3r.robots.base.Robot` and compares its
+model terms (M, C, g), its coefficients theta and its Slotine--Li regressor with
+Pinocchio's rigid-body algorithms on the robot's own Pinocchio model
+(:attr:`Robot.model`) at random states. For the paper's arm that proves the
+closed forms of :mod:`rc3r.robots.rr3` right. Each comparison is a :class:`Check`;
+a run passes iff every check passes. Physical-consistency problems of the
+parameters (:meth:`Robot.physical_issues`) are reported as warnings and never fail
+a run.
 
 Error measure (defined once, here and in ``docs/conventions.md``): for a value
 ``x`` and a reference ``r`` (all entries at all samples of one check)
@@ -21,16 +22,11 @@ compared absolutely). A check passes iff :math:`e_{rel} \le` :data:`TOL`.
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import model as mdl
-from . import regressor as reg
-from .params import physical_issues, theta as theta_of
-from .urdf import load_arm
 
 __all__ = [
     "TOL",
@@ -44,9 +40,6 @@ __all__ = [
     "pinocchio_references",
     "check_minimality",
     "verify_model",
-    "render_text",
-    "report_to_dict",
-    "cmd_verify_model",
 ]
 
 #: Pass threshold on the relative error of every check. Each entry of M, S, g, Y
@@ -70,8 +63,6 @@ RANK_RTOL = 1e-9
 #: determine 15 coefficients, and (3 * 200) x 30 is ample and cheap to SVD.
 MINIMALITY_STATES = 200
 
-#: Number of coefficients theta (columns of Y).
-N_THETA = 15
 
 
 @dataclass(frozen=True)
@@ -107,9 +98,9 @@ class VerifyReport:
     Attributes
     ----------
     urdf : str
-        Path of the URDF checked.
-    theta : tuple of 15 float
-        :math:`\\theta(p)` of the URDF's parameters, paper order.
+        Where the robot came from (its URDF path, or its label).
+    theta : tuple of p float
+        The robot's coefficients theta.
     checks : dict of str to Check
         One entry per identity (names in :func:`verify_model`).
     warnings : tuple of str
@@ -118,6 +109,8 @@ class VerifyReport:
         True iff every check passed.
     samples, seed : int
         Number of random states and the RNG seed used.
+    robot : str
+        The robot's registry name.
     """
 
     urdf: str
@@ -127,6 +120,7 @@ class VerifyReport:
     passed: bool = False
     samples: int = 0
     seed: int = 0
+    robot: str = ""
 
 
 def compare(value, reference, tol: float = TOL) -> Check:
@@ -153,8 +147,8 @@ def compare(value, reference, tol: float = TOL) -> Check:
     return Check(abs_err, rel_err, tol, bool(rel_err <= tol))
 
 
-def sample_states(n: int, seed: int = 0) -> dict[str, np.ndarray]:
-    """Random states, each an (n, 3) array, from ``np.random.default_rng(seed)``.
+def sample_states(n: int, seed: int = 0, joints: int = 3) -> dict[str, np.ndarray]:
+    """Random states, each an (n, joints) array, from ``np.random.default_rng(seed)``.
 
     ``q`` is uniform in [-pi, pi] [rad]; ``qd``, ``qdd``, ``v``, ``a`` are
     uniform in [-5, 5] [rad/s, rad/s^2]; drawn in that order.
@@ -162,9 +156,9 @@ def sample_states(n: int, seed: int = 0) -> dict[str, np.ndarray]:
     if n < 1:
         raise ValueError(f"need at least one sample, got {n}")
     rng = np.random.default_rng(seed)
-    out = {"q": rng.uniform(-math.pi, math.pi, (n, 3))}
+    out = {"q": rng.uniform(-math.pi, math.pi, (n, joints))}
     for key in ("qd", "qdd", "v", "a"):
-        out[key] = rng.uniform(-5.0, 5.0, (n, 3))
+        out[key] = rng.uniform(-5.0, 5.0, (n, joints))
     return out
 
 
@@ -190,11 +184,12 @@ def mass_matrix_derivative(model, data, q, qd) -> np.ndarray:
     """
     import pinocchio as pin
 
-    zero = np.zeros(3)
+    nv = model.nv
+    zero = np.zeros(nv)
     base = np.array(pin.computeRNEADerivatives(model, data, q, zero, zero)[0], copy=True)
-    Md = np.empty((3, 3))
-    for j in range(3):
-        e = np.zeros(3)
+    Md = np.empty((nv, nv))
+    for j in range(nv):
+        e = np.zeros(nv)
         e[j] = 1.0
         dq = np.array(pin.computeRNEADerivatives(model, data, q, zero, e)[0], copy=True)
         Md[:, j] = (dq - base) @ qd
@@ -217,9 +212,10 @@ def pinocchio_references(model, states: dict[str, np.ndarray]) -> dict[str, np.n
     data = model.createData()
     Q, QD, QDD, V, A = (states[k] for k in ("q", "qd", "qdd", "v", "a"))
     n = Q.shape[0]
-    out = {k: np.empty((n, 3, 3)) for k in ("M", "C", "Mdot")}
-    out.update({k: np.empty((n, 3)) for k in ("g", "c", "tau", "tau_sl")})
-    zero = np.zeros(3)
+    nv = model.nv
+    out = {k: np.empty((n, nv, nv)) for k in ("M", "C", "Mdot")}
+    out.update({k: np.empty((n, nv)) for k in ("g", "c", "tau", "tau_sl")})
+    zero = np.zeros(nv)
     for i in range(n):
         q, qd = Q[i], QD[i]
         M = _symmetrize_upper(np.array(pin.crba(model, data, q), copy=True))
@@ -234,7 +230,7 @@ def pinocchio_references(model, states: dict[str, np.ndarray]) -> dict[str, np.n
 
 
 def _rnea(model, states: dict[str, np.ndarray]) -> np.ndarray:
-    """``pinocchio.rnea(q, qd, qdd)`` at each state, shape (N, 3)."""
+    """``pinocchio.rnea(q, qd, qdd)`` at each state, shape (N, n)."""
     import pinocchio as pin
 
     data = model.createData()
@@ -270,24 +266,27 @@ def check_minimality(model, Y_stacked: np.ndarray, states: dict[str, np.ndarray]
                      tol: float = TOL) -> Check:
     r"""Theta is a *minimal* parametrization: span(Y) == span(Pinocchio regressor).
 
-    Stacks ``pinocchio.computeJointTorqueRegressor`` (3 x 30 per state, the 10
-    standard parameters of each body) over the n states of ``Y_stacked``
+    Stacks ``pinocchio.computeJointTorqueRegressor`` (n x 10 bodies per state, the 10
+    standard parameters of each body) over the states of ``Y_stacked``
     (:func:`verify_model` uses :data:`MINIMALITY_STATES` states). Since theta is
-    linear in Pinocchio's parameters, span(Y_pin) is a subspace of span(Y); the check requires both numerical ranks to be 15
-    (:data:`RANK_RTOL`) and the relative residual of projecting each column of
-    one matrix onto the column space of the other to be <= ``tol``.
+    linear in Pinocchio's parameters, span(Y_pin) is a subspace of span(Y); the
+    check requires both numerical ranks to be p (:data:`RANK_RTOL`) and the
+    relative residual of projecting each column of one matrix onto the column
+    space of the other to be <= ``tol``.
 
     Parameters
     ----------
-    Y_stacked : ndarray, shape (3 n, 15)
-        The closed-form regressor at the first n states of ``states``.
+    Y_stacked : ndarray, shape (n * states, p)
+        The robot's inverse-dynamics regressor at the first states of ``states``.
     states : dict
         As returned by :func:`sample_states` (``q``, ``qd``, ``qdd`` used).
     """
     import pinocchio as pin
 
     data = model.createData()
-    n = Y_stacked.shape[0] // 3
+    nj = states["q"].shape[1]
+    p = Y_stacked.shape[1]
+    n = Y_stacked.shape[0] // nj
     Yp = np.vstack([
         np.array(pin.computeJointTorqueRegressor(model, data, states["q"][i], states["qd"][i],
                                                  states["qdd"][i]), copy=True)
@@ -297,22 +296,21 @@ def check_minimality(model, Y_stacked: np.ndarray, states: dict[str, np.ndarray]
     By, rank_y, _ = _orthonormal_basis(Y_stacked, RANK_RTOL)
     a1, r1 = _projection_residual(Yp, By)
     a2, r2 = _projection_residual(Y_stacked, Bp)
-    gap = sp[N_THETA] / sp[0] if sp.size > N_THETA else 0.0
-    detail = (f"rank(Pinocchio 3x30 regressor, {n} states) = {rank_p}, rank(Y) = {rank_y}; "
-              f"s16/s1 = {gap:.1e}, s15/s1 = {sp[N_THETA - 1] / sp[0]:.1e}")
+    gap = sp[p] / sp[0] if sp.size > p else 0.0
+    detail = (f"rank(Pinocchio {nj}x{Yp.shape[1]} regressor, {n} states) = {rank_p}, rank(Y) = {rank_y}; "
+              f"s{p + 1}/s1 = {gap:.1e}, s{p}/s1 = {sp[p - 1] / sp[0]:.1e}")
     rel = max(r1, r2)
-    passed = rank_p == N_THETA and rank_y == N_THETA and bool(rel <= tol)
+    passed = rank_p == p and rank_y == p and bool(rel <= tol)
     return Check(max(a1, a2), rel, tol, passed, detail)
 
 
-def verify_model(urdf_path=None, samples: int = 1000, seed: int = 0) -> VerifyReport:
-    r"""Compare the closed-form model of a URDF's arm with Pinocchio at random states.
+def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
+    r"""Compare a robot's model and regressor with Pinocchio at random states.
 
     Parameters
     ----------
-    urdf_path : path-like, optional
-        URDF of a 3R arm of the paper's structure; default the committed
-        ``urdf/rr3.urdf`` (:func:`rc3r.urdf.default_urdf_path`).
+    robot : rc3r.robots.base.Robot
+        The robot; its Pinocchio model (:attr:`Robot.model`) is the reference.
     samples : int
         Number of random states (:func:`sample_states`: q uniform in [-pi, pi],
         qd, qdd, v, a uniform in [-5, 5]).
@@ -324,139 +322,59 @@ def verify_model(urdf_path=None, samples: int = 1000, seed: int = 0) -> VerifyRe
     VerifyReport
         Checks, each over all samples (shapes per state in parentheses):
 
-        ``M_vs_crba``            M(q) (3,3) == crba (symmetrized)
-        ``S_vs_coriolis_matrix`` S(q, qd) (3,3) == computeCoriolisMatrix
-        ``Sqd_vs_rnea``          S qd (3,) == rnea(q, qd, 0) - g
-        ``g_vs_gravity``         g(q) (3,) == computeGeneralizedGravity
-        ``Y_theta_vs_rnea``      Y(q, qd, qdd) theta (3,) == rnea(q, qd, qdd)
-        ``Ysl_theta_vs_pinocchio`` Y(q, qd, v, a) theta (3,) == M a + C v + g (Pinocchio)
-        ``skew_symmetry``        S + S^T (3,3) == dM/dt (:func:`mass_matrix_derivative`)
-        ``theta_least_squares``  lstsq of stacked Y (3N,15) against stacked rnea == theta (15,)
+        ``M_vs_crba``            M(q) (n,n) == crba (symmetrized)
+        ``S_vs_coriolis_matrix`` C(q, qd) (n,n) == computeCoriolisMatrix
+        ``Sqd_vs_rnea``          C qd (n,) == rnea(q, qd, 0) - g
+        ``g_vs_gravity``         g(q) (n,) == computeGeneralizedGravity
+        ``Y_theta_vs_rnea``      Y(q, qd, qd, qdd) theta (n,) == rnea(q, qd, qdd)
+        ``Ysl_theta_vs_pinocchio`` Y(q, qd, v, a) theta (n,) == M a + C v + g (Pinocchio)
+        ``skew_symmetry``        C + C^T (n,n) == dM/dt (:func:`mass_matrix_derivative`)
+        ``theta_least_squares``  lstsq of stacked Y (nN,p) against stacked rnea == theta (p,)
         ``minimality``           :func:`check_minimality` on the first
                                  :data:`MINIMALITY_STATES` states
 
         The two identification checks use the same states as the others if
         ``samples >= MINIMALITY_STATES``, else :data:`MINIMALITY_STATES` states
-        drawn with the same seed (15 coefficients need at least 5 states).
-
-    Raises
-    ------
-    UrdfError
-        Missing, malformed or non-3R URDF (from :func:`rc3r.urdf.load_arm`).
+        drawn with the same seed.
     """
-    arm = load_arm(urdf_path)
-    p = arm.params
-    th = theta_of(p)
-    l2, g0 = p.lengths[1], p.g0
-    st = sample_states(samples, seed)
+    th = np.asarray(robot.theta, dtype=float)
+    nj, p = robot.n, robot.p
+    model = robot.model
+    st = sample_states(samples, seed, nj)
     Q, QD, QDD, V, A = (st[k] for k in ("q", "qd", "qdd", "v", "a"))
-    ref = pinocchio_references(arm.model, st)
+    ref = pinocchio_references(model, st)
 
-    M = mdl.mass_matrix(th, Q)
-    S = mdl.coriolis_matrix(th, Q, QD)
-    Y = reg.regressor(Q, QD, QDD, l2=l2, g0=g0)
-    Ysl = reg.slotine_li_regressor(Q, QD, V, A, l2=l2, g0=g0)
-    Y_stacked = Y.reshape(-1, N_THETA)
+    M = robot.mass_matrix(Q)
+    S = robot.coriolis_matrix(Q, QD)
+    Y = robot.regressor(Q, QD, QD, QDD)
+    Ysl = robot.regressor(Q, QD, V, A)
+    Y_stacked = Y.reshape(-1, p)
     if samples >= MINIMALITY_STATES:
         st_id, Y_id, tau_id = st, Y_stacked, ref["tau"]
-    else:  # too few states to identify 15 coefficients: use MINIMALITY_STATES of the same seed
-        st_id = sample_states(MINIMALITY_STATES, seed)
-        Y_id = reg.regressor(st_id["q"], st_id["qd"], st_id["qdd"], l2=l2, g0=g0).reshape(-1, N_THETA)
-        tau_id = _rnea(arm.model, st_id)
+    else:  # too few states to identify p coefficients: use MINIMALITY_STATES of the same seed
+        st_id = sample_states(MINIMALITY_STATES, seed, nj)
+        Y_id = robot.regressor(st_id["q"], st_id["qd"], st_id["qd"], st_id["qdd"]).reshape(-1, p)
+        tau_id = _rnea(model, st_id)
     theta_hat = np.linalg.lstsq(Y_id, tau_id.reshape(-1), rcond=None)[0]
 
     checks = {
         "M_vs_crba": compare(M, ref["M"]),
         "S_vs_coriolis_matrix": compare(S, ref["C"]),
         "Sqd_vs_rnea": compare(np.einsum("nij,nj->ni", S, QD), ref["c"]),
-        "g_vs_gravity": compare(mdl.gravity(th, Q, l2=l2, g0=g0), ref["g"]),
+        "g_vs_gravity": compare(robot.gravity(Q), ref["g"]),
         "Y_theta_vs_rnea": compare(Y @ th, ref["tau"]),
         "Ysl_theta_vs_pinocchio": compare(Ysl @ th, ref["tau_sl"]),
         "skew_symmetry": compare(S + np.swapaxes(S, 1, 2), ref["Mdot"]),
         "theta_least_squares": compare(theta_hat, th),
-        "minimality": check_minimality(arm.model, Y_id[: 3 * MINIMALITY_STATES], st_id),
+        "minimality": check_minimality(model, Y_id[: nj * MINIMALITY_STATES], st_id),
     }
     return VerifyReport(
-        urdf=arm.path,
+        urdf=str(getattr(robot, "urdf", None) or robot.label),
         theta=tuple(float(x) for x in th),
         checks=checks,
-        warnings=tuple(physical_issues(p)),
+        warnings=tuple(robot.physical_issues()),
         passed=all(c.passed for c in checks.values()),
         samples=samples,
         seed=seed,
+        robot=robot.name,
     )
-
-
-# ---- rendering --------------------------------------------------------------------------
-
-
-def _finite_or_none(x: float):
-    return float(x) if math.isfinite(x) else None
-
-
-def report_to_dict(report: VerifyReport) -> dict:
-    """The ``--json`` object: urdf, theta, checks, warnings, pass (+ tol, samples, seed).
-
-    Non-finite errors become ``null`` so the output is strict JSON.
-    """
-    return {
-        "urdf": report.urdf,
-        "theta": list(report.theta),
-        "checks": {
-            name: {
-                "max_abs_err": _finite_or_none(c.max_abs_err),
-                "max_rel_err": _finite_or_none(c.max_rel_err),
-                "tol": c.tol,
-                "pass": c.passed,
-                **({"detail": c.detail} if c.detail else {}),
-            }
-            for name, c in report.checks.items()
-        },
-        "warnings": list(report.warnings),
-        "pass": report.passed,
-        "samples": report.samples,
-        "seed": report.seed,
-    }
-
-
-def render_text(report: VerifyReport) -> str:
-    """Human-readable report: aligned table, theta, warnings, overall PASS/FAIL."""
-    w = max(len("check"), *(len(n) for n in report.checks))
-    lines = [
-        f"rc3r verify-model: {report.urdf}",
-        f"{report.samples} random states (seed {report.seed}); "
-        "rel err = max|x - ref| / max(1, max|ref|)",
-        "",
-        f"{'check':<{w}}  {'max abs err':>11}  {'max rel err':>11}  {'tol':>7}  result",
-    ]
-    for name, c in report.checks.items():
-        lines.append(f"{name:<{w}}  {c.max_abs_err:11.3e}  {c.max_rel_err:11.3e}  {c.tol:7.0e}  "
-                     f"{'PASS' if c.passed else 'FAIL'}")
-    for name, c in report.checks.items():
-        if c.detail:
-            lines.append(f"  {name}: {c.detail}")
-    lines += ["", "theta (paper order, section 3.1.1):"]
-    for k in range(0, len(report.theta), 5):
-        lines.append("  " + "  ".join(f"th{k + j + 1:<2d} = {x:10.6g}"
-                                      for j, x in enumerate(report.theta[k:k + 5])))
-    lines.append("")
-    if report.warnings:
-        lines.append("warnings (do not fail the run):")
-        lines += [f"  - {wrn}" for wrn in report.warnings]
-    else:
-        lines.append("warnings: none (every link is physically consistent)")
-    failed = [n for n, c in report.checks.items() if not c.passed]
-    lines.append("")
-    lines.append("PASS: every check passed" if report.passed
-                 else f"FAIL: {len(failed)} check(s) failed: {', '.join(failed)}")
-    return "\n".join(lines)
-
-
-def cmd_verify_model(args) -> int:
-    """``rc3r verify-model``: print the report (text or one JSON object); 0 iff all pass."""
-    report = verify_model(args.urdf, samples=args.samples, seed=args.seed)
-    if args.json:
-        print(json.dumps(report_to_dict(report), allow_nan=False))
-    else:
-        print(render_text(report))
-    return 0 if report.passed else 1

@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .simulate import SimResult
-
 __all__ = ["run_metrics", "CHATTERING_DEFINITION"]
 
 CHATTERING_DEFINITION = "total variation of u per second [N m/s] (sampled: every sample; continuous: 1 kHz grid)"
@@ -28,18 +26,20 @@ def _tolist(x):
     return [float(v) for v in np.asarray(x).ravel()]
 
 
-def run_metrics(res: SimResult, seed=None) -> dict:
+def run_metrics(res, seed=None) -> dict:
     """The metrics of ``res`` as a JSON-ready dict (definitions in the module docstring)."""
     e = res.e
+    nan = [float("nan")] * res.q.shape[1]
     T = max(res.t_end, 1e-12)
     late = res.t >= res.t[-1] - 1.0 if res.t.size else np.zeros(0, bool)
     if res.tv_exact is not None:
         tv = np.asarray(res.tv_exact) / T
     else:
-        tv = np.abs(np.diff(res.u, axis=0)).sum(axis=0) / T if res.u.shape[0] > 1 else np.zeros(3)
+        tv = np.abs(np.diff(res.u, axis=0)).sum(axis=0) / T if res.u.shape[0] > 1 else np.zeros(res.u.shape[1])
     c = res.controller
     return {
         "controller": c.get("name"),
+        "robot": res.robot.get("robot"),
         "plant": res.plant,
         "mode": res.mode,
         "rate_hz": res.options.rate,
@@ -52,10 +52,10 @@ def run_metrics(res: SimResult, seed=None) -> dict:
         "rho": c.get("rho", c.get("rho_i")),
         "eps": c.get("eps", c.get("eps_i")),
         "gains": {k: c[k] for k in ("Kp", "Kd", "K", "Lambda", "Gamma") if k in c},
-        "max_abs_error": _tolist(np.abs(e).max(axis=0)) if e.size else [float("nan")] * 3,
-        "rms_error": _tolist(np.sqrt((e ** 2).mean(axis=0))) if e.size else [float("nan")] * 3,
-        "final_error_bound": _tolist(np.abs(e[late]).max(axis=0)) if late.any() else [float("nan")] * 3,
-        "max_abs_torque": _tolist(np.abs(res.u).max(axis=0)) if res.u.size else [float("nan")] * 3,
+        "max_abs_error": _tolist(np.abs(e).max(axis=0)) if e.size else nan,
+        "rms_error": _tolist(np.sqrt((e ** 2).mean(axis=0))) if e.size else nan,
+        "final_error_bound": _tolist(np.abs(e[late]).max(axis=0)) if late.any() else nan,
+        "max_abs_torque": _tolist(np.abs(res.u).max(axis=0)) if res.u.size else nan,
         "chattering": _tolist(tv),
         "chattering_definition": CHATTERING_DEFINITION,
         "wall_time_s": float(res.wall_time_s),

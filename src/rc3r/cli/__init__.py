@@ -1,9 +1,15 @@
 """Command line: ``rc3r <command> [options]``.
 
 ``main(argv) -> int`` is the whole program (tested in-process); ``entry`` is the
-console script. User errors (:class:`~rc3r.errors.Rc3rError`, bad options) print
-one line ``rc3r: error: ...`` on stderr and return a non-zero code, never a
-traceback. Each command's work lives in its own module; this file only parses.
+console script. This package is the only place that parses arguments, prints and
+chooses exit codes; each command group has its module (:mod:`.model`,
+:mod:`.bounds`, :mod:`.run`, :mod:`.bench`), which calls the library.
+
+Exit codes (:data:`EXIT`): 0 success; 1 a check failed (``verify-model`` found the
+model wrong, ``bench`` found a wrong result); 2 bad input (one line
+``rc3r: error: ...``, never a traceback); 3 a simulation diverged (its data up to
+then is written); 70 an internal error (a bug: one line, ``RC3R_DEBUG=1`` for the
+traceback); 130 interrupted.
 """
 from __future__ import annotations
 
@@ -13,11 +19,14 @@ import math
 import os
 import sys
 
-from .errors import Rc3rError
+from ..controllers import LAWS
+from ..errors import Rc3rError
+from ..simulate import ENGINES
 
-__all__ = ["main", "entry", "build_parser"]
+__all__ = ["main", "entry", "build_parser", "EXIT"]
 
-CONTROLLERS = ("fbl", "robust", "robust-coeff", "adaptive", "pd")
+#: Exit codes of every command.
+EXIT = {"ok": 0, "check_failed": 1, "bad_input": 2, "diverged": 3, "internal_error": 70, "interrupted": 130}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -68,17 +77,18 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
     r = sub.add_parser("run", help="simulate one controller on one plant")
-    r.add_argument("--controller", choices=CONTROLLERS, help="control law (default: config file, else robust)")
+    r.add_argument("--controller", choices=tuple(LAWS), help="control law (default: config file, else robust)")
     r.add_argument("--perturbed", action="store_true",
                    help="plant = Table 1 robot, controller uses theta_0 and rho (default: ideal)")
     r.add_argument("--plant", help="plant: nominal (Table 1), upper, lower, paper-upper, "
-                                  "corner:<30 bits>, random:<seed>, or a URDF path")
+                                  "corner:<30 bits>, random:<seed> (of the box), or a URDF path")
+    r.add_argument("--box", help="box TOML: the plant's box and the controller's bounds (default: the paper's box)")
     r.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")
     r.add_argument("--rate", type=_positive(), help="sampled-data controller at this rate [Hz] "
                                                     "(default: continuous time)")
     r.add_argument("--duration", type=_positive(), help="simulated time [s] (default 10)")
     r.add_argument("--config", help="TOML with gains, trajectory, plant, bounds (docs/control.md)")
-    r.add_argument("--engine", choices=("fast", "reference"), help="integrator (default fast)")
+    r.add_argument("--engine", choices=ENGINES, help="simulator (default auto: fast when compiled, else python)")
     r.add_argument("--out", default="out/run", help="output directory (default out/run)")
 
     pa = sub.add_parser("paper", help="the five scenarios of section 4, figures and summary")
@@ -97,12 +107,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 #: command -> (module, function); modules are imported only when their command runs.
 _COMMANDS = {
-    "verify-model": ("verify", "cmd_verify_model"),
-    "make-urdf": ("urdf", "cmd_make_urdf"),
-    "bounds": ("uncertainty", "cmd_bounds"),
-    "run": ("scenarios", "cmd_run"),
-    "paper": ("scenarios", "cmd_paper"),
-    "sweep-eps": ("scenarios", "cmd_sweep_eps"),
+    "verify-model": ("model", "cmd_verify_model"),
+    "make-urdf": ("model", "cmd_make_urdf"),
+    "bounds": ("bounds", "cmd_bounds"),
+    "run": ("run", "cmd_run"),
+    "paper": ("run", "cmd_paper"),
+    "sweep-eps": ("run", "cmd_sweep_eps"),
     "bench": ("bench", "cmd_bench"),
 }
 
@@ -120,19 +130,19 @@ def main(argv=None) -> int:
         return int(_dispatch(args) or 0)
     except _UsageError as exc:
         print(f"rc3r: error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT["bad_input"]
     except Rc3rError as exc:
         print(f"rc3r: error: {exc}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
         print("rc3r: interrupted (files already written are complete)", file=sys.stderr)
-        return 130
+        return EXIT["interrupted"]
     except Exception as exc:  # a bug: still one line, with a way to get the traceback
         if os.environ.get("RC3R_DEBUG"):
             raise
         print(f"rc3r: internal error: {type(exc).__name__}: {exc} (set RC3R_DEBUG=1 for a traceback)",
               file=sys.stderr)
-        return 1
+        return EXIT["internal_error"]
 
 
 def entry() -> None:  # console script

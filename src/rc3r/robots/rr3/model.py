@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _kernels as K
+from . import kernels as K
 from ._batch import as_states, as_theta
 from .params import G0
 

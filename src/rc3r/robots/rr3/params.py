@@ -36,8 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ConfigError, ParameterError
-from .io import read_toml
+from ...errors import ConfigError, ParameterError
+from ...io import read_toml
 
 __all__ = [
     "G0",
@@ -208,9 +208,9 @@ def load_params(path: str | Path) -> ArmParams:
 
 
 def table1() -> ArmParams:
-    """The robot of Table 1 of the paper (packaged ``rc3r/data/rr3.toml``)."""
-    text = resources.files("rc3r").joinpath("data/rr3.toml").read_text()
-    return _params_from_mapping(tomllib.loads(text), "rc3r/data/rr3.toml")
+    """The robot of Table 1 of the paper (packaged ``rc3r/robots/rr3/data/rr3.toml``)."""
+    text = resources.files(__package__).joinpath("data/rr3.toml").read_text()
+    return _params_from_mapping(tomllib.loads(text), "rc3r/robots/rr3/data/rr3.toml")
 
 
 def theta_from_vector(std, lengths) -> np.ndarray:

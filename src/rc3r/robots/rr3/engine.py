@@ -13,8 +13,10 @@ controller state ``z`` (the adaptive law's theta estimate; empty otherwise).
   held (zero-order hold); the plant is integrated over each period by classical RK4
   with ``nsub`` sub-steps; the controller state is updated by forward Euler.
 
-Status codes: 0 ok, 1 non-finite state, 2 |q| bound, 3 |qd| bound, 4 |u| bound,
-5 mass matrix not positive definite, 6 step size underflow.
+The control law enters through the generic compiled kernels of
+:mod:`rc3r.controllers._kernels` (selected by its integer code); the regressor, the
+plant and the integrators are this robot's. Status codes: :mod:`rc3r.simulate.status`.
+:class:`FastEngine` is what :attr:`RR3.fast_engine` hands to :func:`rc3r.simulate.simulate`.
 """
 from __future__ import annotations
 
@@ -23,49 +25,32 @@ import math
 import numpy as np
 from numba import njit
 
-from . import _kernels as K
-from .controllers import control_into
-from .trajectory import reference_into
+from ...controllers._kernels import apply_regressor, law_output, law_signals
+from ...simulate.status import HMIN, NOTPD, OK, check
+from ...trajectory import reference_into
+from . import kernels as K
 
 _JIT = dict(cache=True, nogil=True)
 
-OK, NONFINITE, QBOUND, QDBOUND, UBOUND, NOTPD, HMIN = 0, 1, 2, 3, 4, 5, 6
-STATUS_TEXT = {
-    OK: "ok",
-    NONFINITE: "state became NaN or infinite",
-    QBOUND: "|q| exceeded its bound",
-    QDBOUND: "|qd| exceeded its bound",
-    UBOUND: "|u| exceeded its bound",
-    NOTPD: "plant mass matrix not positive definite",
-    HMIN: "integrator step size underflow",
-}
+
+@njit(**_JIT)
+def control(law, cp, q, qd, z, ref, l2, g0, u, zdot, Y, th_eff, v, a, r, w):
+    """u (3,) and zdot of a registered law (code ``law``) on the 3R regressor; returns ||Y^T r||."""
+    law_signals(law, cp, q, qd, ref, v, a, r, w)
+    K.slotine_li_scalars(q[1], q[2], qd[0], qd[1], qd[2], v[0], v[1], v[2], a[0], a[1], a[2], l2, g0, Y)
+    yn = law_output(law, cp, Y, r, z, th_eff, zdot)
+    apply_regressor(Y, th_eff, w, u)
+    return yn
 
 
 @njit(**_JIT)
-def closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3):
+def closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w):
     """xdot = f(t, x); fills ``u``. Returns False if the plant M is not PD."""
     reference_into(tp, t, ref)
-    control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, xdot[6:], Y, xi)
+    control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, xdot[6:], Y, xi, v, a, r, w)
     for i in range(3):
         xdot[i] = x[3 + i]
     return K.forward_dynamics_into(thp, x[0:3], x[3:6], u, l2, g0, xdot[3:6], w33, w3)
-
-
-@njit(**_JIT)
-def _check(x, u, lim):
-    for i in range(x.shape[0]):
-        if not math.isfinite(x[i]):
-            return NONFINITE
-    for i in range(3):
-        if abs(x[i]) > lim[0]:
-            return QBOUND
-        if abs(x[3 + i]) > lim[1]:
-            return QDBOUND
-        if not math.isfinite(u[i]):
-            return NONFINITE
-        if abs(u[i]) > lim[2]:
-            return UBOUND
-    return OK
 
 
 @njit(**_JIT)
@@ -136,15 +121,16 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
     J = np.empty((n, n)); W = np.empty((n, n)); piv = np.zeros(n, dtype=np.int64)
     u = np.empty(3); ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
     w33 = np.empty((3, 3)); w3 = np.empty(3)
+    v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3)
     nrhs = 0; nsteps = 0; nrej = 0
     t = t_out[0]
-    ok = closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, F0, u, ref, Y, xi, w33, w3)
+    ok = closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, F0, u, ref, Y, xi, w33, w3, v, a, r, w)
     nrhs += 1
     X[0] = x; U[0] = u; R[0] = ref[0]
-    ynorm[0] = control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi)
+    ynorm[0] = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi, v, a, r, w)
     if not ok:
         return NOTPD, 1, nrhs, nsteps, nrej, t
-    st = _check(x, u, lim)
+    st = check(x, u, lim)
     if st != OK:
         return st, 1, nrhs, nsteps, nrej, t
     h = h0
@@ -162,12 +148,12 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
                 dx = sqeps * max(abs(x[j]), 1e-3)
                 xj = x[j]
                 x[j] = xj + dx
-                closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3)
+                closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
                 x[j] = xj
                 for i in range(n):
                     J[i, j] = (Fp[i] - F0[i]) / dx
             dt = sqeps * max(abs(t), 1.0)
-            closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3)
+            closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
             for i in range(n):
                 Ft[i] = (Fp[i] - F0[i]) / dt
             nrhs += n + 1
@@ -184,14 +170,14 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
                 _lu_solve(W, piv, k1)
                 for i in range(n):
                     tmp[i] = x[i] + 0.5 * h * k1[i]
-                ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3)
+                ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3, v, a, r, w)
                 for i in range(n):
                     k2[i] = F1[i] - k1[i]
                 _lu_solve(W, piv, k2)
                 for i in range(n):
                     k2[i] += k1[i]
                     xnew[i] = x[i] + h * k2[i]
-                ok2 = closed_loop_rhs(t + h, xnew, thp, law, cp, tp, l2, g0, F2, u, ref, Y, xi, w33, w3)
+                ok2 = closed_loop_rhs(t + h, xnew, thp, law, cp, tp, l2, g0, F2, u, ref, Y, xi, w33, w3, v, a, r, w)
                 nrhs += 2
                 for i in range(n):
                     k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
@@ -214,14 +200,14 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             for i in range(n):
                 x[i] = xnew[i]
                 F0[i] = F2[i]
-            st = _check(x, u, lim)
+            st = check(x, u, lim)
             if st != OK:
                 return st, k, nrhs, nsteps, nrej, t
             fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / 3.0)))
             h = h * fac
         X[k] = x
         reference_into(tp, t, ref)
-        ynorm[k] = control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi)
+        ynorm[k] = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi, v, a, r, w)
         U[k] = u
         R[k] = ref[0]
     return OK, t_out.shape[0], nrhs, nsteps, nrej, t
@@ -248,6 +234,7 @@ def integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0,
     u = np.empty(3); uprev = np.empty(3)
     ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
     w33 = np.empty((3, 3)); w3 = np.empty(3)
+    v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3)
     k1 = np.empty(6); k2 = np.empty(6); k3 = np.empty(6); k4 = np.empty(6); xs = np.empty(6)
     h = Ts / nsub
     nrhs = 0
@@ -255,13 +242,13 @@ def integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0,
     for s in range(nsamples + 1):
         t = t0 + s * Ts
         reference_into(tp, t, ref)
-        yn = control_into(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, zdot, Y, xi)
+        yn = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, zdot, Y, xi, v, a, r, w)
         if s > 0:
             for i in range(3):
                 tv[i] += abs(u[i] - uprev[i])
         for i in range(3):
             uprev[i] = u[i]
-        st = _check(x, u, lim)
+        st = check(x, u, lim)
         if s % dec == 0 or st != OK:
             X[stored] = x; U[stored] = u; R[stored] = ref[0]; ynorm[stored] = yn
             stored += 1
@@ -288,3 +275,27 @@ def integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0,
         for i in range(n - 6):  # controller state: forward Euler, as a digital controller
             x[6 + i] += Ts * zdot[i]
     return OK, stored, nrhs, nsamples, t0 + nsamples * Ts
+
+
+class FastEngine:
+    """The 3R's compiled simulator behind the interface :mod:`rc3r.simulate` expects.
+
+    ``continuous(...)`` returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``;
+    ``sampled(...)`` returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``; both fill
+    the output arrays ``X`` (state), ``U`` (torque), ``R`` (q_d), ``yn`` (||Y^T r||).
+    """
+
+    n = 3
+    p = 15
+
+    @staticmethod
+    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn):
+        l2, g0 = plant.params.lengths[1], plant.params.g0
+        return integrate_continuous(x0, t_out, plant.theta, code, cp, tp, l2, g0, rtol, atol, h0, hmax,
+                                    lim, X, U, R, yn)
+
+    @staticmethod
+    def sampled(plant, code, cp, tp, x0, t0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv):
+        l2, g0 = plant.params.lengths[1], plant.params.g0
+        return integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, plant.theta, code, cp, tp, l2, g0, lim,
+                                 X, U, R, yn, tv)

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import UrdfError
-from .io import atomic_write_text
+from ...errors import UrdfError
+from ...io import atomic_write_text
 from .params import G0, ArmParams, LinkParams, require_simulable
 
 __all__ = [
@@ -38,13 +38,15 @@ __all__ = [
     "LoadedArm",
     "default_urdf_path",
     "REPO_URDF",
+    "model_from_params",
+    "params_from_model",
 ]
 
 #: DH table of the paper: (alpha_i, uses_d) -- d_i = l_i for joint 1, a_i = l_i otherwise.
 _ALPHA = (math.pi / 2, 0.0, 0.0)
 
 #: Where the committed URDF lives in a source checkout.
-REPO_URDF = Path(__file__).resolve().parents[2] / "urdf" / "rr3.urdf"
+REPO_URDF = Path(__file__).resolve().parents[4] / "urdf" / "rr3.urdf"
 
 #: Tolerance [m, rad] when comparing a URDF's joint placements with the DH table;
 #: URDF numbers are decimal text, so 1e-9 admits any sane rounding and nothing else.
@@ -362,16 +364,6 @@ def load_arm(path: str | Path | None = None, g0: float = G0) -> LoadedArm:
     model.gravity.linear = np.array([0.0, 0.0, -float(g0)])
     params = params_from_model(model, lengths, g0=g0, name=root.get("name", "rr3"))
     return LoadedArm(params=params, model=model, path=str(path))
-
-
-def cmd_make_urdf(args) -> int:
-    """``rc3r make-urdf``: write the URDF of a parameter TOML (default Table 1)."""
-    from .params import load_params, table1
-
-    p = load_params(args.params) if args.params else table1()
-    out = write_urdf(p, args.out)
-    print(f"wrote {out}")
-    return 0
 
 
 def model_from_params(p: ArmParams):

@@ -5,8 +5,8 @@ from files and nothing is written (except temporary directories of the
 subprocess measurements, removed afterwards).
 
 Operations (``ops``)
-    Per-state cost of the closed form (:mod:`rc3r.regressor`, :mod:`rc3r.model`,
-    the compiled kernels of :mod:`rc3r._kernels`) and of Pinocchio's ``rnea``,
+    Per-state cost of the closed form (:mod:`.regressor`, :mod:`.model`,
+    the compiled kernels of :mod:`.kernels`) and of Pinocchio's ``rnea``,
     ``aba``, ``crba`` looped from Python over the *same* random states.
     Each is timed with :func:`time.perf_counter` after a warm-up call (numba
     compilation or cache load), ``repeats`` times; ``median_s``/``min_s`` are per
@@ -34,7 +34,7 @@ Correctness (``checks``)
     return 1; a missed *timing* target does not (it is reported).
 
 Simulations (``sims``)
-    :func:`rc3r.scenarios.paper_scenarios` in continuous time, FBL-perturbed and
+    :func:`rc3r.robots.rr3.paper.scenarios` in continuous time, FBL-perturbed and
     robust-perturbed sampled at 1 kHz (the robust law with the paper's gains
     diverges at 1 kHz; the run stops early, which is reported), and, in the full
     mode only, robust-perturbed for 2 s with the fast and the reference engine
@@ -67,9 +67,9 @@ import time
 import numpy as np
 from numba import njit
 
-from . import _kernels as K
+from . import kernels as K
 
-__all__ = ["run_bench", "render_text", "cmd_bench", "TARGETS"]
+__all__ = ["run_bench", "TARGETS"]
 
 #: The issue's targets: name -> (limit, comparison, unit, description).
 TARGETS = {
@@ -136,7 +136,7 @@ def _time(fn, repeats: int) -> tuple[float, float]:
 
 def _compare(x, ref) -> dict:
     """Error measure of :mod:`rc3r.verify`: max |x - ref|, relative to max(1, max |ref|)."""
-    from .verify import TOL
+    from ...verify import TOL
 
     x = np.asarray(x, float)
     ref = np.asarray(ref, float)
@@ -165,7 +165,7 @@ def _machine() -> dict:
         usable = len(os.sched_getaffinity(0))
     except AttributeError:
         usable = os.cpu_count()
-    from . import __version__
+    from ... import __version__
 
     return {
         "date_utc": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -334,7 +334,7 @@ def _sim_row(spec, res, walls, execute_s) -> dict:
 
 
 def _run(spec, repeats: int):
-    from .scenarios import execute
+    from ...study import execute
 
     walls = []
     for _ in range(repeats):
@@ -346,7 +346,8 @@ def _run(spec, repeats: int):
 
 
 def bench_sims(duration: float, repeats: int, reference: bool) -> dict:
-    from .scenarios import build_run, execute, paper_scenarios
+    from ...study import build_run, execute
+    from .paper import scenarios as paper_scenarios
 
     # warm-up: compile or load every integrator/law combination used below
     _progress("warming up the simulator (numba compile or cache load) ...")
@@ -379,7 +380,7 @@ _COMPILE_SCRIPT = r"""
 import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
-import rc3r.regressor as reg, rc3r.scenarios as S
+import rc3r.robots.rr3.regressor as reg, rc3r.study as S
 t1 = time.perf_counter()
 z = np.zeros((4, 3))
 reg.inverse_dynamics(np.ones(15), z, z, z, l2=0.5)
@@ -403,7 +404,7 @@ def _clean_env(**extra) -> dict:
 
 def bench_compile() -> dict:
     """Cold (empty NUMBA_CACHE_DIR) vs warm (same dir) start, each a fresh interpreter."""
-    out = {"script": "import rc3r.regressor, rc3r.scenarios; inverse_dynamics on 4 states; "
+    out = {"script": "import rc3r.robots.rr3.regressor, rc3r.study; inverse_dynamics on 4 states; "
                      "robust-perturbed 0.1 s continuous; fbl-perturbed 0.1 s sampled 1 kHz"}
     cache = tempfile.mkdtemp(prefix="rc3r-numba-cache-")
     try:
@@ -525,127 +526,3 @@ def run_bench(quick: bool = False) -> dict:
 
 
 # ---- text output ------------------------------------------------------------------------
-
-
-def _si(x: float | None) -> str:
-    """Seconds with a readable unit."""
-    if x is None or not np.isfinite(x):
-        return "-"
-    a = abs(x)
-    for unit, f in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6), ("ns", 1e-9)):
-        if a >= f or unit == "ns":
-            return f"{x / f:.3g} {unit}"
-    return f"{x:g} s"
-
-
-def _table(head: list[str], rows: list[list[str]], right: set[int] = frozenset()) -> str:
-    w = [max(len(str(r[i])) for r in [head] + rows) for i in range(len(head))]
-
-    def fmt(r):
-        return "  ".join(str(c).rjust(w[i]) if i in right else str(c).ljust(w[i]) for i, c in enumerate(r)).rstrip()
-
-    return "\n".join([fmt(head), "  ".join("-" * x for x in w)] + [fmt(r) for r in rows])
-
-
-def render_text(r: dict) -> str:
-    mc = r["machine"]
-    st = r["settings"]
-    lines = [f"rc3r bench ({r['mode']}) -- {mc['date_utc']}, {mc['cpu']}, {mc['cpus_usable']} usable CPU(s); "
-             f"python {mc['python']}, numpy {mc['numpy']}, numba {mc['numba']}, pinocchio {mc['pinocchio']}", ""]
-    lines.append(f"Operations: time per state over N = {st['n_states']} random states, {st['repeats']} repeat(s) "
-                 "after a warm-up; 'x rnea' = pin.rnea-loop median / median (times faster).")
-    rows = [[k, _si(o["median_s"]), _si(o["min_s"]), f"{o['ratio_to_rnea']:.3g}",
-             "-" if k.startswith("pin.") else
-             f"{o['ratio_to_pin_equivalent']:.3g} vs {o['pin_equivalent'].split()[0]}"]
-            for k, o in r["ops"].items()]
-    lines += [_table(["operation", "median/state", "min/state", "x rnea", "x pin equivalent"], rows, {1, 2, 3}), ""]
-    cpp = r["pinocchio_cpp_estimate"]
-    lines.append(f"Pinocchio C++ cost (ESTIMATE: pin.rnea on a fixed state {_si(cpp['rnea_fixed_state_s'])} minus "
-                 f"on an empty model {_si(cpp['rnea_empty_model_s'])}): rnea ~ {_si(cpp['rnea_cpp_estimate_s'])}"
-                 f" per call; closed-form tau {_si(cpp['closed_form_tau_s'])} -> ~"
-                 f"{cpp['ratio_cpp_estimate_to_closed_form']:.3g}x faster than Pinocchio's C++ (lower bound).")
-    lines.append("")
-    lines.append("Correctness on the benchmark's states (error measure of rc3r.verify):")
-    rows = [[k, str(c["states"]), f"{c['max_abs_err']:.3g}", f"{c['rel_err']:.3g}", "ok" if c["ok"] else "FAIL"]
-            for k, c in r["checks"].items()]
-    lines += [_table(["check", "states", "max abs err", "rel err", ""], rows, {1, 2, 3}), ""]
-    lines.append(f"Simulations (wall = integration only, median of {st['sim_repeats']} run(s); "
-                 "execute = simulate + metrics, last run):")
-    rows = []
-    for k, s in r["sims"].items():
-        mode = s["mode"] if s["rate_hz"] is None else f"sampled {s['rate_hz'] / 1000:g} kHz"
-        rows.append([k, mode, s["engine"], f"{s['duration_s']:g} s", _si(s["wall_s"]), _si(s["execute_s"]),
-                     str(s["rhs_evals"]), s["message"]])
-    lines += [_table(["scenario", "mode", "engine", "duration", "wall", "execute", "rhs evals", "status"],
-                     rows, {3, 4, 5, 6}), ""]
-    if "reference_speedup" in r:
-        rs = r["reference_speedup"]
-        lines += [f"Fast engine vs reference (Pinocchio ABA + SciPy Radau), robust-perturbed 2 s: "
-                  f"{_si(rs['fast_wall_s'])} vs {_si(rs['reference_wall_s'])} -> {rs['speedup']:.3g}x", ""]
-    lines.append("Targets:")
-    rows = []
-    for k, t in r["targets"].items():
-        fmt = _si if t["unit"] == "s" else (lambda x: f"{x:.3g}x")
-        rows.append([k, f"{t['comparison']} {fmt(t['target'])}", fmt(t["measured"]),
-                     "met" if t["met"] else "NOT MET", t["note"]])
-    lines += [_table(["target", "limit", "measured", "", "note"], rows, {2}), ""]
-    c = r["compile"]
-    if "skipped" in c:
-        lines.append(f"Compile (numba first call): skipped ({c['skipped']}).")
-    else:
-        lines.append("Compile (numba first call), fresh interpreter each; cold = empty NUMBA_CACHE_DIR, "
-                     "warm = same dir again:")
-        rows = []
-        for label in ("cold", "warm"):
-            x = c.get(label, {})
-            if "error" in x:
-                rows.append([label, "error: " + x["error"], "", "", "", ""])
-                continue
-            rows.append([label, _si(x.get("import_s")), _si(x.get("first_inverse_dynamics_s")),
-                         _si(x.get("first_continuous_sim_s")), _si(x.get("first_sampled_sim_s")),
-                         _si(x.get("process_wall_s"))])
-        lines += [_table(["start", "import", "1st inverse_dynamics", "1st continuous sim", "1st sampled sim",
-                          "process total"], rows, {1, 2, 3, 4, 5})]
-        if "saved_by_cache_s" in c:
-            lines.append(f"cache saves {_si(c['saved_by_cache_s'])} per fresh process "
-                         f"(cache size {c.get('cache_bytes', 0) / 2 ** 20:.2f} MiB)")
-    lines.append("")
-    mem = r["memory"]
-    if "skipped" in mem:
-        lines.append(f"Peak memory of `rc3r paper`: skipped ({mem['skipped']}).")
-    elif "error" in mem:
-        lines.append(f"Peak memory of `rc3r paper`: error: {mem['error']}")
-    else:
-        lines.append(f"Peak memory of `rc3r paper`: {mem['peak_rss_mib']:.0f} MiB resident "
-                     f"(wall {_si(mem['wall_s'])}, exit {mem['returncode']}).")
-    lines.append("")
-    lines.append(f"Correctness: {'all checks pass' if r['checks_ok'] else 'SOME CHECKS FAIL'}. "
-                 f"Benchmark wall time {_si(r['total_wall_s'])}.")
-    return "\n".join(lines)
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return float(x) if np.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
-def cmd_bench(args) -> int:
-    """``rc3r bench [--json] [--quick]``: print the tables (or one JSON object); 1 if a check fails."""
-    r = run_bench(quick=bool(getattr(args, "quick", False)))
-    if getattr(args, "json", False):
-        print(json.dumps(_jsonable(r), indent=2))
-    else:
-        print(render_text(r))
-    if not r["checks_ok"]:
-        print("rc3r: error: the closed form disagrees with Pinocchio on the benchmark's states", file=sys.stderr)
-        return 1
-    return 0

@@ -1,0 +1,372 @@
+r"""Joint-space tracking laws behind one interface, and their registry.
+
+Every law here is :math:`u = Y(q, \dot q, v, a)\,\theta_{\mathrm{eff}} + w`: it sees
+the robot only through the Slotine--Li regressor ``Y`` (shape (n, p)), so one law
+serves every robot. With :math:`e = q - q_d`:
+
+* :class:`FeedbackLinearization` (``fbl``) -- computed torque,
+  :math:`v = \dot q`, :math:`a = \ddot q_d - K_d \dot e - K_p e`, :math:`w = 0`.
+* :class:`Robust` (``robust``) -- Spong's law, eqs. (3)-(6):
+  :math:`v = \dot q_d - \Lambda e`, :math:`a = \ddot q_d - \Lambda \dot e`,
+  :math:`r = \dot q - v`, :math:`\theta_{\mathrm{eff}} = \theta_0 + \delta`,
+  :math:`\delta = -\rho\, Y^T r / \max(\|Y^T r\|, \epsilon)`, :math:`w = -K r`.
+* :class:`RobustPerCoefficient` (``robust-coeff``) -- eq. (7):
+  :math:`\delta_i = -\rho_i\, \xi_i / \max(|\xi_i|, \epsilon_i)`, :math:`\xi = Y^T r`.
+* :class:`Adaptive` (``adaptive``) -- Slotine--Li: :math:`\theta_{\mathrm{eff}} = \hat\theta`,
+  :math:`\dot{\hat\theta} = -\Gamma Y^T r` (controller state :math:`\hat\theta`).
+* :class:`PDGravity` (``pd``) -- :math:`v = a = 0` (so :math:`Y\theta = g(q)`),
+  :math:`w = -K_p e - K_d \dot e`.
+
+Gains are diagonal: a scalar (same for every joint or coefficient) or a vector
+of the right length, strictly positive. Their defaults are the one gain table of
+rc3r (the command line uses them too; ``docs/control.md`` says why each value).
+
+**Adding a law** is one class and one registration::
+
+    @register_law
+    class MyLaw(Law):
+        name = "my-law"
+        def signals(self, q, qd, ref): ...   # -> v, a, r, w   (each (n,))
+        def output(self, Y, r, z): ...       # -> theta_eff (p,), zdot (nz,), diagnostic float
+
+A law written in Python runs with any robot in the generic Python engine
+(continuous or sampled time; ``examples/custom_law.py``). The built-in laws also
+have a compiled kernel (:mod:`rc3r.controllers._kernels`, selected by ``code``),
+which the robots' fast engines call; their Python methods call that same kernel,
+so each law's arithmetic exists once.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ParameterError
+from . import _kernels as _K
+
+__all__ = [
+    "Law",
+    "FeedbackLinearization",
+    "Robust",
+    "RobustPerCoefficient",
+    "Adaptive",
+    "PDGravity",
+    "LAWS",
+    "register_law",
+    "make_law",
+    "default_gains",
+]
+
+
+def _array(name, x, size=None) -> np.ndarray:
+    try:
+        arr = np.array(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be numbers, got {x!r}") from None
+    if arr.ndim > 1 or (size is not None and arr.ndim == 1 and arr.size != size):
+        want = "a number" if size is None else f"a number or {size} numbers"
+        raise ParameterError(f"{name} must be {want}, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+def _positive(name, x) -> np.ndarray:
+    arr = _array(name, x)
+    if np.any(arr <= 0):
+        raise ParameterError(f"{name} must be > 0, got {arr.tolist()}")
+    return arr
+
+
+def _nonnegative(name, x) -> np.ndarray:
+    arr = _array(name, x)
+    if np.any(arr < 0):
+        raise ParameterError(f"{name} must be >= 0, got {arr.tolist()}")
+    return arr
+
+
+def _sized(name, arr, size) -> np.ndarray:
+    """Broadcast a scalar or check a vector against ``size`` (joints or coefficients)."""
+    arr = np.asarray(arr, dtype=float)
+    if arr.ndim == 0:
+        return np.full(size, float(arr))
+    if arr.size != size:
+        raise ParameterError(f"{name} has {arr.size} entries, the robot needs {size}")
+    return arr.copy()
+
+
+@dataclass(frozen=True, eq=False)
+class Law:
+    """Base of every control law: its own model ``theta`` (p,) and gains.
+
+    Subclasses set ``name`` (registry key), ``code`` (compiled kernel, or None
+    for a Python-only law), ``model_inputs`` (which bounds the law needs besides
+    theta: ``"rho"``, ``"rho_i"``) and implement :meth:`signals` and
+    :meth:`output`. ``n`` (joints) is fixed when the law meets a robot
+    (:meth:`pack`, :meth:`torque`): scalar gains broadcast to it.
+    """
+
+    theta: np.ndarray
+    name = "?"
+    code = None
+    model_inputs: tuple = ()
+
+    def __post_init__(self):
+        th = _array("theta", self.theta)
+        if th.ndim != 1 or th.size == 0:
+            raise ParameterError(f"theta must be a non-empty vector, got shape {th.shape}")
+        object.__setattr__(self, "theta", th)
+
+    @property
+    def p(self) -> int:
+        """Number of coefficients of the law's model."""
+        return self.theta.size
+
+    # ---- the law ----------------------------------------------------------------------
+    def initial_state(self) -> np.ndarray:
+        """Initial controller state z (empty except for laws with dynamics)."""
+        return np.zeros(0)
+
+    def signals(self, q, qd, ref):
+        """``(v, a, r, w)``, each (n,): regressor arguments, sliding variable, additive torque.
+
+        ``ref`` (3, n) holds the rows q_d, qd_d, qdd_d.
+        """
+        n = len(q)
+        v, a, r, w = (np.empty(n) for _ in range(4))
+        _K.law_signals(self.code, self.pack(n), np.asarray(q, float), np.asarray(qd, float),
+                       np.asarray(ref, float), v, a, r, w)
+        return v, a, r, w
+
+    def output(self, Y, r, z):
+        """``(theta_eff (p,), zdot, diagnostic)`` from the regressor Y (n, p) and r (n,)."""
+        Y = np.ascontiguousarray(Y, dtype=float)
+        th_eff = np.empty(self.p)
+        zdot = np.zeros(self.initial_state().size)
+        zz = np.asarray(z if z is not None else self.initial_state(), dtype=float)
+        diag = _K.law_output(self.code, self.pack(Y.shape[0]), Y, np.asarray(r, float), zz, th_eff, zdot)
+        return th_eff, zdot, float(diag)
+
+    def torque(self, robot, q, qd, ref, z=None):
+        """Control torque at one state: ``(u (n,), zdot, diagnostic)``.
+
+        ``u = robot.regressor(q, qd, v, a) @ theta_eff + w``: the robot enters only
+        through its regressor (kinematics), never through its parameters.
+        """
+        q = np.asarray(q, dtype=float)
+        qd = np.asarray(qd, dtype=float)
+        v, a, r, w = self.signals(q, qd, ref)
+        Y = robot.regressor(q, qd, v, a)
+        if Y.shape != (q.size, self.p):
+            raise ParameterError(f"law {self.name!r} has {self.p} coefficients, the robot's regressor "
+                                 f"is {Y.shape}")
+        th_eff, zdot, diag = self.output(Y, r, z)
+        return Y @ th_eff + w, zdot, diag
+
+    # ---- packing for compiled kernels ---------------------------------------------
+    def _gain_vectors(self, n: int) -> list[np.ndarray]:  # pragma: no cover - per law
+        raise NotImplementedError
+
+    def pack(self, n: int) -> np.ndarray:
+        """``[p, theta, gains ...]`` for :mod:`rc3r.controllers._kernels` (n joints)."""
+        if self.code is None:
+            raise ParameterError(f"law {self.name!r} has no compiled kernel")
+        return np.concatenate([[float(self.p)], self.theta, *self._gain_vectors(n)])
+
+    def describe(self) -> dict:
+        """JSON-ready dict: name and every field (arrays as lists)."""
+        out = {"name": self.name}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            out[f.name] = v.tolist() if isinstance(v, np.ndarray) else v
+        return out
+
+
+def _gain(default):
+    return field(default=default)
+
+
+@dataclass(frozen=True, eq=False)
+class FeedbackLinearization(Law):
+    """Computed torque with diagonal ``Kp`` [1/s^2] and ``Kd`` [1/s].
+
+    Layout of :meth:`pack`: ``[p, theta, Kp (n), Kd (n)]``.
+    """
+
+    Kp: float | np.ndarray = _gain(100.0)
+    Kd: float | np.ndarray = _gain(100.0)
+    name = "fbl"
+    code = _K.FBL
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "Kp", _positive("Kp", self.Kp))
+        object.__setattr__(self, "Kd", _positive("Kd", self.Kd))
+
+    def _gain_vectors(self, n):
+        return [_sized("Kp", self.Kp, n), _sized("Kd", self.Kd, n)]
+
+
+@dataclass(frozen=True, eq=False)
+class PDGravity(Law):
+    """PD plus gravity compensation from the model theta: ``Kp`` [N m/rad], ``Kd`` [N m s/rad].
+
+    Layout of :meth:`pack`: ``[p, theta, Kp (n), Kd (n)]``.
+    """
+
+    Kp: float | np.ndarray = _gain(500.0)
+    Kd: float | np.ndarray = _gain(100.0)
+    name = "pd"
+    code = _K.PD
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "Kp", _positive("Kp", self.Kp))
+        object.__setattr__(self, "Kd", _positive("Kd", self.Kd))
+
+    def _gain_vectors(self, n):
+        return [_sized("Kp", self.Kp, n), _sized("Kd", self.Kd, n)]
+
+
+@dataclass(frozen=True, eq=False)
+class _Sliding(Law):
+    """Laws on r = e_dot + Lambda e: ``K`` [N m s/rad] and ``Lambda`` [1/s], diagonal, > 0."""
+
+    K: float | np.ndarray = _gain(100.0)
+    Lambda: float | np.ndarray = _gain(50.0)
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "K", _positive("K", self.K))
+        object.__setattr__(self, "Lambda", _positive("Lambda", self.Lambda))
+
+    def _gain_vectors(self, n):
+        return [_sized("K", self.K, n), _sized("Lambda", self.Lambda, n)]
+
+
+@dataclass(frozen=True, eq=False)
+class Robust(_Sliding):
+    """Spong's robust law, eq. (3)-(6), with bound ``rho`` and boundary layer ``eps``.
+
+    Inside the boundary layer ``||Y^T r|| <= eps`` the law is the high gain
+    ``(rho / eps) Y Y^T``: stiff (docs/control.md). Layout of :meth:`pack`:
+    ``[p, theta, K (n), Lambda (n), rho, eps]``.
+    """
+
+    rho: float = 0.0
+    eps: float = 0.5
+    name = "robust"
+    code = _K.ROBUST
+    model_inputs = ("rho",)
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "rho", _scalar("rho", _nonnegative("rho", self.rho)))
+        object.__setattr__(self, "eps", _scalar("eps", _positive("eps", self.eps)))
+
+    def _gain_vectors(self, n):
+        return super()._gain_vectors(n) + [np.array([self.rho, self.eps])]
+
+
+def _scalar(name, arr) -> float:
+    if arr.ndim != 0:
+        raise ParameterError(f"{name} must be one number, got {arr.tolist()}")
+    return float(arr)
+
+
+@dataclass(frozen=True, eq=False)
+class RobustPerCoefficient(_Sliding):
+    """Eq. (7): per-coefficient bounds ``rho_i`` (p,) and boundary layers ``eps_i``.
+
+    Layout of :meth:`pack`: ``[p, theta, K (n), Lambda (n), rho_i (p), eps_i (p)]``.
+    """
+
+    rho_i: float | np.ndarray = 0.0
+    eps_i: float | np.ndarray = 0.5
+    name = "robust-coeff"
+    code = _K.ROBUST_COEFF
+    model_inputs = ("rho_i",)
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "rho_i", _sized("rho_i", _nonnegative("rho_i", self.rho_i), self.p))
+        object.__setattr__(self, "eps_i", _sized("eps_i", _positive("eps_i", self.eps_i), self.p))
+
+    def _gain_vectors(self, n):
+        return super()._gain_vectors(n) + [self.rho_i, self.eps_i]
+
+
+@dataclass(frozen=True, eq=False)
+class Adaptive(_Sliding):
+    """Slotine--Li adaptive law; ``theta`` is the initial estimate, ``Gamma`` the adaptation gain.
+
+    Layout of :meth:`pack`: ``[p, theta, K (n), Lambda (n), Gamma (p)]``.
+    """
+
+    Gamma: float | np.ndarray = _gain(10.0)
+    name = "adaptive"
+    code = _K.ADAPTIVE
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "Gamma", _sized("Gamma", _positive("Gamma", self.Gamma), self.p))
+
+    def _gain_vectors(self, n):
+        return super()._gain_vectors(n) + [self.Gamma]
+
+    def initial_state(self) -> np.ndarray:
+        return self.theta.copy()
+
+
+#: name -> law class. :func:`register_law` adds to it.
+LAWS: dict[str, type[Law]] = {}
+
+
+def register_law(cls: type[Law]) -> type[Law]:
+    """Class decorator: make ``cls`` available as ``make_law(cls.name, ...)`` and ``--controller``."""
+    if not (isinstance(cls, type) and issubclass(cls, Law)) or cls.name in ("?", ""):
+        raise TypeError("register_law needs a Law subclass with a name")
+    LAWS[cls.name] = cls
+    return cls
+
+
+for _cls in (FeedbackLinearization, Robust, RobustPerCoefficient, Adaptive, PDGravity):
+    register_law(_cls)
+
+
+#: Fields of every law that are not gains.
+_MODEL_FIELDS = {"theta", "rho", "rho_i"}
+
+
+def default_gains(name: str) -> dict:
+    """The default gains of law ``name`` (the class's field defaults): the one gain table."""
+    cls = _law_class(name)
+    return {f.name: f.default for f in dataclasses.fields(cls)
+            if f.name not in _MODEL_FIELDS and f.default is not dataclasses.MISSING}
+
+
+def _law_class(name: str) -> type[Law]:
+    try:
+        return LAWS[name]
+    except KeyError:
+        raise ParameterError(f"unknown controller {name!r} ({', '.join(LAWS)})") from None
+
+
+def make_law(name: str, theta, *, rho=None, rho_i=None, **gains) -> Law:
+    """Build the registered law ``name`` from its model and gains.
+
+    ``rho`` / ``rho_i`` are passed only to laws that use them (``model_inputs``),
+    so a caller may always supply both. Unknown gain names are refused.
+    """
+    cls = _law_class(name)
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(gains) - names)
+    if unknown:
+        raise ParameterError(f"controller {name!r} has no gain {', '.join(unknown)} "
+                             f"(gains: {', '.join(sorted(names - _MODEL_FIELDS))})")
+    kwargs = dict(gains)
+    for key, value in (("rho", rho), ("rho_i", rho_i)):
+        if key in names and key not in kwargs and value is not None:
+            kwargs[key] = value
+    return cls(theta, **kwargs)

@@ -1,0 +1,109 @@
+r"""Compiled kernels of the built-in control laws, generic over n joints and p coefficients.
+
+Every law here has the form :math:`u = Y(q, \dot q, v, a)\,\theta_{\mathrm{eff}} + w`,
+computed in two stages around the robot's regressor:
+
+1. :func:`law_signals` -- from the state and the reference ``ref`` (rows
+   :math:`q_d, \dot q_d, \ddot q_d`), the regressor arguments ``v``, ``a``, the
+   sliding variable ``r`` and the additive term ``w``;
+2. the caller evaluates ``Y = Y(q, qd, v, a)`` with its robot's kernel;
+3. :func:`law_output` -- :math:`\theta_{\mathrm{eff}}` (into ``th_eff``), the
+   controller-state rate ``zdot``, and :math:`\|Y^T r\|` for diagnostics;
+   :func:`apply_regressor` then forms ``u = Y th_eff + w``.
+
+The law is picked by an integer ``code`` (a short static dispatch: numba does
+not cache a function that receives another jitted function as an argument).
+``cp`` packs ``[p, theta (p), gains ...]``; each law class's ``pack`` documents
+its layout. The arithmetic of every law is written once, here; the Python path
+(:meth:`rc3r.controllers.Law.torque`) calls these same kernels.
+"""
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+FBL, ROBUST, ROBUST_COEFF, ADAPTIVE, PD = 0, 1, 2, 3, 4
+
+_JIT = dict(cache=True, nogil=True)
+
+
+@njit(**_JIT)
+def law_signals(code, cp, q, qd, ref, v, a, r, w):
+    """Fill v, a (regressor arguments), r (sliding variable) and w (additive torque), each (n,)."""
+    n = q.shape[0]
+    p = int(cp[0])
+    g = 1 + p  # first gain
+    if code == FBL:
+        # computed torque: v = qd, a = qdd_d + Kd (qd_d - qd) + Kp (q_d - q), w = 0
+        for i in range(n):
+            v[i] = qd[i]
+            a[i] = ref[2, i] + cp[g + n + i] * (ref[1, i] - qd[i]) + cp[g + i] * (ref[0, i] - q[i])
+            r[i] = 0.0
+            w[i] = 0.0
+    elif code == PD:
+        # PD + gravity: Y(q, qd, 0, 0) theta = g(q); w = Kp (q_d - q) + Kd (qd_d - qd)
+        for i in range(n):
+            v[i] = 0.0
+            a[i] = 0.0
+            r[i] = 0.0
+            w[i] = cp[g + i] * (ref[0, i] - q[i]) + cp[g + n + i] * (ref[1, i] - qd[i])
+    else:
+        # sliding laws: e = q - q_d, v = qd_d - Lambda e, a = qdd_d - Lambda e_dot,
+        # r = qd - v = e_dot + Lambda e, w = -K r
+        for i in range(n):
+            lam = cp[g + n + i]
+            e = q[i] - ref[0, i]
+            ed = qd[i] - ref[1, i]
+            r[i] = ed + lam * e
+            v[i] = ref[1, i] - lam * e
+            a[i] = ref[2, i] - lam * ed
+            w[i] = -cp[g + i] * r[i]
+
+
+@njit(**_JIT)
+def law_output(code, cp, Y, r, z, th_eff, zdot):
+    """Effective parameters ``th_eff`` (p,) and controller-state rate ``zdot``; returns ||Y^T r||.
+
+    ``th_eff`` doubles as the work array for ``xi = Y^T r``.
+    """
+    n = Y.shape[0]
+    p = int(cp[0])
+    if code == FBL or code == PD:
+        for j in range(p):
+            th_eff[j] = cp[1 + j]
+        return 0.0
+    nrm2 = 0.0
+    for j in range(p):
+        acc = 0.0
+        for i in range(n):
+            acc += Y[i, j] * r[i]
+        th_eff[j] = acc
+        nrm2 += acc * acc
+    nrm = math.sqrt(nrm2)
+    s = 1 + p + 2 * n  # first law-specific entry after theta, K, Lambda
+    if code == ROBUST:
+        # eq. (6): delta = -rho xi / max(||xi||, eps)
+        scale = cp[s] / max(nrm, cp[s + 1])
+        for j in range(p):
+            th_eff[j] = cp[1 + j] - scale * th_eff[j]
+    elif code == ROBUST_COEFF:
+        # eq. (7): delta_i = -rho_i xi_i / max(|xi_i|, eps_i)
+        for j in range(p):
+            th_eff[j] = cp[1 + j] - cp[s + j] * th_eff[j] / max(abs(th_eff[j]), cp[s + p + j])
+    else:  # ADAPTIVE: theta_hat is the controller state z; d theta_hat/dt = -Gamma Y^T r
+        for j in range(p):
+            zdot[j] = -cp[s + j] * th_eff[j]
+            th_eff[j] = z[j]
+    return nrm
+
+
+@njit(**_JIT)
+def apply_regressor(Y, th_eff, w, u):
+    """u = w + Y th_eff, shape (n,)."""
+    n, p = Y.shape
+    for i in range(n):
+        acc = 0.0
+        for j in range(p):
+            acc += Y[i, j] * th_eff[j]
+        u[i] = w[i] + acc

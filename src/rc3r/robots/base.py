@@ -1,0 +1,167 @@
+r"""The robot contract: what every robot gives the rest of rc3r.
+
+A :class:`Robot` is a kinematic structure together with one set of dynamic
+parameters. The same class serves as the **plant** (the true robot being
+simulated) and as the **nominal model** a controller is designed from; a
+controller never reads the plant's parameters, it sees the plant only through
+the Slotine--Li regressor :math:`Y(q, \dot q, v, a)`, which depends on the
+kinematics alone:
+
+.. math::
+
+    Y(q, \dot q, v, a)\,\theta = M(q)\,a + C(q, \dot q)\,v + g(q),
+
+with :math:`C` the Christoffel-symbol factorization (so :math:`\dot M - 2C` is
+skew-symmetric) and :math:`\theta` the robot's :attr:`Robot.theta`.
+
+To add a robot, subclass :class:`Robot` and implement (in the style of SciPy's
+``OdeSolver``):
+
+Attributes
+    ``name`` (str, class attribute: the registry name), ``n`` (joints),
+    ``p`` (coefficients), ``theta`` (p,), ``coefficient_names`` (p str),
+    ``joint_limits`` ((n,), (n,) [rad]), ``label`` (where this parameter set
+    came from), ``model`` (a ``pinocchio.Model`` with the same parameters and
+    gravity: the ground truth the tests and ``verify-model`` compare with).
+Methods
+    :meth:`Robot.regressor` (Slotine--Li Y), :meth:`Robot.mass_matrix`,
+    :meth:`Robot.coriolis_matrix`, :meth:`Robot.gravity` (the model terms,
+    however the robot computes them), :meth:`Robot.forward_dynamics` (the plant),
+    and, for boxes of parameter uncertainty, :meth:`Robot.standard_parameters`,
+    :attr:`Robot.standard_parameter_names`, :meth:`Robot.theta_of_standard`,
+    :meth:`Robot.with_standard_parameters`, :meth:`Robot.physical_issues`.
+Optional
+    :attr:`Robot.fast_engine`: a compiled closed-loop simulator (see
+    :mod:`rc3r.robots.rr3.engine` for the one the paper's arm has). Robots
+    without one are simulated by the generic Python engine
+    (:mod:`rc3r.simulate`), with any control law, in continuous or sampled time.
+
+Then register the class in :data:`rc3r.robots.ROBOTS`. Nothing outside a
+robot's own package may name it: the control laws, the simulator, the bounds and
+the command line use only this contract.
+
+Shapes: states ``q, qd, v, a, u`` are (n,) [rad, rad/s, rad/s, rad/s^2, N m];
+batched methods accept (N, n) and return a leading axis N.
+"""
+from __future__ import annotations
+
+import abc
+
+import numpy as np
+
+__all__ = ["Robot"]
+
+
+class Robot(abc.ABC):
+    """Abstract base of every robot (module docstring: what to implement)."""
+
+    #: Registry name (``rc3r.robots.ROBOTS``).
+    name: str = "?"
+
+    # ---- sizes and parameters --------------------------------------------------------
+
+    @property
+    @abc.abstractmethod
+    def n(self) -> int:
+        """Number of joints (size of q)."""
+
+    @property
+    @abc.abstractmethod
+    def p(self) -> int:
+        """Number of dynamic coefficients (size of theta, columns of Y)."""
+
+    @property
+    @abc.abstractmethod
+    def theta(self) -> np.ndarray:
+        """This parameter set's coefficients, shape (p,)."""
+
+    @property
+    @abc.abstractmethod
+    def coefficient_names(self) -> tuple[str, ...]:
+        """Names of the p coefficients, in order."""
+
+    @property
+    @abc.abstractmethod
+    def label(self) -> str:
+        """Where this parameter set came from (``nominal``, ``random:7``, a URDF path ...)."""
+
+    @property
+    @abc.abstractmethod
+    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Position limits ``(lower, upper)``, each (n,) [rad]."""
+
+    @property
+    @abc.abstractmethod
+    def model(self):
+        """``pinocchio.Model`` of this robot with the same parameters and gravity."""
+
+    # ---- dynamics ---------------------------------------------------------------------
+
+    @abc.abstractmethod
+    def regressor(self, q, qd, v, a) -> np.ndarray:
+        r"""Slotine--Li regressor, (n, p) or (N, n, p).
+
+        Identity: ``regressor(q, qd, v, a) @ theta == M(q) a + C(q, qd) v + g(q)``.
+        """
+
+    @abc.abstractmethod
+    def mass_matrix(self, q) -> np.ndarray:
+        """M(q), (n, n) or (N, n, n)."""
+
+    @abc.abstractmethod
+    def coriolis_matrix(self, q, qd) -> np.ndarray:
+        r"""Christoffel factorization :math:`C(q, \dot q)`, (n, n) or (N, n, n)."""
+
+    @abc.abstractmethod
+    def gravity(self, q) -> np.ndarray:
+        """g(q), (n,) or (N, n) [N m]."""
+
+    @abc.abstractmethod
+    def forward_dynamics(self, q, qd, u) -> np.ndarray:
+        r"""Joint accelerations :math:`\ddot q = M^{-1}(u - C\dot q - g)`, (n,) [rad/s^2]."""
+
+    # ---- parameter sets (boxes of uncertainty) ------------------------------------
+
+    @property
+    @abc.abstractmethod
+    def standard_parameter_names(self) -> tuple[str, ...]:
+        """Names of the standard parameters (10 per moving body), in vector order."""
+
+    @abc.abstractmethod
+    def standard_parameters(self) -> np.ndarray:
+        """This parameter set as standard parameters, (10 * bodies,)."""
+
+    @abc.abstractmethod
+    def theta_of_standard(self, std) -> np.ndarray:
+        """theta of standard-parameter vectors, (..., 10 * bodies) -> (..., p) (same kinematics)."""
+
+    @abc.abstractmethod
+    def with_standard_parameters(self, std, label: str) -> "Robot":
+        """The same robot with other standard parameters (a perturbed plant)."""
+
+    @abc.abstractmethod
+    def physical_issues(self) -> list[str]:
+        """Physical-consistency problems (mass <= 0, inertia not PD, triangle inequality)."""
+
+    def require_simulable(self) -> None:
+        """Raise :class:`~rc3r.errors.ParameterError` for a mass <= 0 or a non-PD inertia.
+
+        The triangle inequality is only warned about (the paper's Table 1 violates it).
+        """
+        from ..errors import ParameterError
+
+        for issue in self.physical_issues():
+            if "triangle" not in issue:
+                raise ParameterError(issue)
+
+    # ---- optional ---------------------------------------------------------------------
+
+    #: A compiled closed-loop simulator for this robot, or None (generic Python engine).
+    fast_engine = None
+
+    def describe(self) -> dict:
+        """JSON-ready identification of this robot (name, label, n, p)."""
+        return {"robot": self.name, "label": self.label, "n": self.n, "p": self.p}
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r} n={self.n} p={self.p} label={self.label!r}>"

@@ -1,0 +1,209 @@
+r"""The paper's 3R spatial arm as a :class:`~rc3r.robots.base.Robot`.
+
+Closed-form model (:mod:`.model`), regressor (:mod:`.regressor`) and compiled
+kernels (:mod:`.kernels`) in the paper's 15 coefficients; the Pinocchio model of
+the same parameters (through :mod:`.urdf`) is the ground-truth plant; the compiled
+closed-loop simulator is :mod:`.engine`.
+"""
+from __future__ import annotations
+
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from ..base import Robot
+from . import model as _model
+from . import regressor as _reg
+from .engine import FastEngine
+from .params import STD_NAMES, ArmParams, physical_issues, table1, theta, theta_from_vector
+
+__all__ = ["RR3", "PARAM_NAMES", "COEFFICIENT_NAMES"]
+
+#: Names of the 30 standard parameters (``m1, rcx1, ..., Iyz3``), vector order.
+PARAM_NAMES = tuple(f"{name}{k}" for k in (1, 2, 3) for name in STD_NAMES)
+
+#: Names of the 15 coefficients (paper order, section 3.1.1).
+COEFFICIENT_NAMES = tuple(f"theta{i}" for i in range(1, 16))
+
+
+class RR3(Robot):
+    """The 3R arm with one parameter set (paper convention, :class:`ArmParams`).
+
+    Parameters
+    ----------
+    params : ArmParams
+        Link lengths, masses, CoMs and inertias (docs/conventions.md).
+    label : str
+        Where this parameter set came from.
+    model : pinocchio.Model, optional
+        Its Pinocchio model (built from ``params`` through the generated URDF if
+        omitted); gravity ``(0, 0, -g0)``.
+    urdf : str, optional
+        The URDF it was read from, if any.
+    """
+
+    name = "rr3"
+    fast_engine = FastEngine
+
+    def __init__(self, params: ArmParams, label: str = "nominal", model=None, urdf: str | None = None):
+        self.params = params
+        self._label = label
+        self._model = model
+        self.urdf = urdf
+
+    # ---- construction -----------------------------------------------------------------
+    @classmethod
+    def nominal(cls) -> "RR3":
+        """Table 1 of the paper."""
+        return cls(table1(), "nominal")
+
+    @classmethod
+    def from_urdf(cls, path=None, label: str | None = None) -> "RR3":
+        """A URDF of this arm (default: the committed ``urdf/rr3.urdf``); UrdfError if it is not."""
+        from .urdf import load_arm
+
+        arm = load_arm(path)
+        return cls(arm.params, label or arm.path, arm.model, urdf=arm.path)
+
+    @classmethod
+    def from_params_file(cls, path, label: str | None = None) -> "RR3":
+        """A parameter TOML (format of ``rc3r/robots/rr3/data/rr3.toml``)."""
+        from .params import load_params
+
+        return cls(load_params(path), label or str(path))
+
+    @classmethod
+    def make_urdf(cls, params_path, out):
+        """Write the URDF of a parameter TOML (default Table 1) to ``out``; return its path."""
+        from .params import load_params
+        from .urdf import write_urdf
+
+        return write_urdf(load_params(params_path) if params_path else table1(), out)
+
+    @classmethod
+    def paper_study(cls):
+        """The paper's study of this arm (:mod:`rc3r.robots.rr3.paper`): scenarios and claims."""
+        from . import paper
+
+        return paper
+
+    @classmethod
+    def benchmark(cls, quick: bool = False) -> dict:
+        """``rc3r bench``: the closed form against Pinocchio, simulation timings (:mod:`.bench`)."""
+        from .bench import run_bench
+
+        return run_bench(quick=quick)
+
+    @classmethod
+    def default_box(cls):
+        """The paper's box (section 4)."""
+        from .paper import paper_box
+
+        return paper_box()
+
+    @classmethod
+    def default_trajectory(cls):
+        r"""The paper's :math:`q_d = (\sin t, 5\cos t, \sin t)`."""
+        from .paper import paper_trajectory
+
+        return paper_trajectory()
+
+    # ---- sizes and parameters ---------------------------------------------------------
+    n = 3
+    p = 15
+    coefficient_names = COEFFICIENT_NAMES
+    standard_parameter_names = PARAM_NAMES
+
+    @cached_property
+    def theta(self) -> np.ndarray:
+        """The 15 coefficients of section 3.1.1 (read-only)."""
+        th = theta(self.params)
+        th.flags.writeable = False
+        return th
+
+    @property
+    def label(self) -> str:
+        return self._label
+
+    @property
+    def model(self):
+        if self._model is None:
+            from .urdf import model_from_params
+
+            self._model = model_from_params(self.params)
+        return self._model
+
+    @property
+    def joint_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """The URDF's limits (the generated arm has +-1000 rad: the paper's arm is unlimited)."""
+        m = self.model
+        return np.array(m.lowerPositionLimit), np.array(m.upperPositionLimit)
+
+    @property
+    def l2(self) -> float:
+        """DH length a2 [m]: the kinematic constant in the gravity columns of Y."""
+        return self.params.lengths[1]
+
+    # ---- dynamics ---------------------------------------------------------------------
+    def regressor(self, q, qd, v, a) -> np.ndarray:
+        return _reg.slotine_li_regressor(q, qd, v, a, l2=self.l2, g0=self.params.g0)
+
+    def mass_matrix(self, q) -> np.ndarray:
+        return _model.mass_matrix(self.theta, q)
+
+    def coriolis_matrix(self, q, qd) -> np.ndarray:
+        return _model.coriolis_matrix(self.theta, q, qd)
+
+    def gravity(self, q) -> np.ndarray:
+        return _model.gravity(self.theta, q, l2=self.l2, g0=self.params.g0)
+
+    def forward_dynamics(self, q, qd, u) -> np.ndarray:
+        """Joint accelerations (3,) by Pinocchio's ABA (the ground-truth plant)."""
+        import pinocchio as pin
+
+        data = self._data()
+        return np.array(pin.aba(self.model, data, np.asarray(q, float), np.asarray(qd, float),
+                                np.asarray(u, float)))
+
+    def forward_dynamics_closed_form(self, q, qd, u) -> np.ndarray:
+        """Joint accelerations (3,) from the compiled closed form (the fast engine's plant)."""
+        from . import kernels as K
+
+        qdd = np.empty(3)
+        ok = K.forward_dynamics_into(np.ascontiguousarray(self.theta), np.asarray(q, float),
+                                     np.asarray(qd, float), np.asarray(u, float), self.l2,
+                                     self.params.g0, qdd, np.empty((3, 3)), np.empty(3))
+        if not ok:
+            raise FloatingPointError("closed-form mass matrix is not positive definite")
+        return qdd
+
+    def _data(self):
+        if getattr(self, "_pin_data", None) is None:
+            self._pin_data = self.model.createData()
+        return self._pin_data
+
+    # ---- parameter sets ---------------------------------------------------------------
+    def standard_parameters(self) -> np.ndarray:
+        return self.params.to_vector()
+
+    def theta_of_standard(self, std) -> np.ndarray:
+        return theta_from_vector(std, self.params.lengths)
+
+    def with_standard_parameters(self, std, label: str) -> "RR3":
+        p = self.params
+        return RR3(ArmParams.from_vector(std, p.lengths, p.g0, name=p.name), label)
+
+    def physical_issues(self) -> list[str]:
+        return physical_issues(self.params)
+
+    def describe(self) -> dict:
+        out = super().describe()
+        if self.urdf:
+            out["urdf"] = str(Path(self.urdf))
+        return out
+
+    def __getstate__(self):  # pinocchio Data is rebuilt after unpickling
+        state = dict(self.__dict__)
+        state.pop("_pin_data", None)
+        return state

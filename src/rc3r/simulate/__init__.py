@@ -1,0 +1,257 @@
+r"""Closed-loop simulation: :func:`simulate` returns a :class:`SimResult`, no hidden state.
+
+Two **modes** (the result says which):
+
+* ``continuous`` -- the controller is evaluated inside the integrator, as in the
+  paper's simulation (an idealized, infinitely fast controller).
+* ``sampled`` -- a digital controller at ``rate`` Hz: u is computed at t_k = k/rate
+  and held (zero-order hold) while the plant moves.
+
+Three **engines**:
+
+* ``fast`` -- the robot's compiled simulator (:attr:`Robot.fast_engine`; the paper's
+  arm has one: closed-form plant on the plant's theta, Rosenbrock ode23s for
+  continuous mode, RK4 with ``nsub`` sub-steps per period for sampled mode, see
+  :mod:`rc3r.robots.rr3.engine`). Needs a law with a compiled kernel.
+* ``python`` -- any robot, any law (also a user's law written in Python): the
+  robot's own forward dynamics (Pinocchio ABA), SciPy ``Radau`` at ``rtol``/``atol``
+  (continuous) or RK4 with ``nsub`` sub-steps (sampled).
+* ``reference`` -- the ``python`` engine at tight tolerances: ``Radau`` with
+  ``rtol = 1e-11`` (continuous) or ``DOP853`` per period (sampled). Slow; what the
+  fast engine is tested against (``tests/test_simulate.py``).
+
+``auto`` (default) picks ``fast`` when the robot has a compiled simulator and the
+law a compiled kernel, else ``python``; the result records the engine used.
+
+Stated accuracy (fast engine, defaults ``rtol = 1e-6``, ``atol = 1e-8``), against the
+reference engine (Radau, ``rtol = 1e-11``) on the paper's trajectory over 10 s: joint
+positions within 3e-6 rad, tracking error within 0.1 % of its maximum, torques within
+1 % of max |u|, for every controller (measured 2026-11-22: worst 2.8e-6 rad (PD),
+2.7e-4 and 7.5e-3 (eq. 7); checked over 1.5 s by ``tests/test_simulate.py``). Sampled
+mode: positions within 1e-8 rad of the reference.
+
+A run that leaves its bounds (NaN, ``|q| > q_max``, ``|qd| > qd_max``,
+``|u| > u_max``, M not positive definite) stops there; the result keeps the data up
+to then, its ``status``/``message`` say when and why, and
+:meth:`SimResult.raise_for_status` raises :class:`~rc3r.errors.DivergenceError`.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import DivergenceError, ParameterError
+from . import status as S
+
+__all__ = ["SimOptions", "SimResult", "simulate", "ENGINES"]
+
+#: Engines accepted by :class:`SimOptions`.
+ENGINES = ("auto", "fast", "python", "reference")
+
+
+@dataclass(frozen=True)
+class SimOptions:
+    """Simulation settings.
+
+    Attributes
+    ----------
+    duration : float
+        Simulated time [s] (paper: 10).
+    rate : float or None
+        Controller rate [Hz] for sampled mode; ``None`` = continuous time.
+    output_rate : float
+        Rate of the stored time series [Hz] (continuous mode; sampled mode stores
+        every sample up to this rate, decimating above it).
+    rtol, atol : float
+        Integrator tolerances (continuous mode), mixed relative/absolute per state.
+    nsub : int or None
+        RK4 sub-steps per sampling period (sampled mode); default
+        ``ceil(T / 0.25 ms)``, i.e. RK4 steps of at most 0.25 ms.
+    engine : {"auto", "fast", "python", "reference"}
+    q_max, qd_max, u_max : float
+        Divergence bounds [rad], [rad/s], [N m].
+    """
+
+    duration: float = 10.0
+    rate: float | None = None
+    output_rate: float = 1000.0
+    rtol: float = 1e-6
+    atol: float = 1e-8
+    nsub: int | None = None
+    engine: str = "auto"
+    q_max: float = 1e3
+    qd_max: float = 1e4
+    u_max: float = 1e7
+
+    def __post_init__(self):
+        for name in ("duration", "output_rate", "rtol", "atol", "q_max", "qd_max", "u_max"):
+            x = float(getattr(self, name))
+            if not (np.isfinite(x) and x > 0):
+                raise ParameterError(f"{name} must be finite and > 0, got {getattr(self, name)}")
+        if self.rate is not None and not (np.isfinite(self.rate) and self.rate > 0):
+            raise ParameterError(f"rate must be finite and > 0, got {self.rate}")
+        if self.nsub is not None and int(self.nsub) < 1:
+            raise ParameterError(f"nsub must be >= 1, got {self.nsub}")
+        if self.engine not in ENGINES:
+            raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
+
+    @property
+    def substeps(self) -> int:
+        """RK4 sub-steps per sampling period."""
+        if self.nsub is not None:
+            return int(self.nsub)
+        return max(1, int(np.ceil((1.0 / self.rate) / 2.5e-4 - 1e-9))) if self.rate else 1
+
+    @property
+    def mode(self) -> str:
+        """``"continuous"`` or ``"sampled"``."""
+        return "continuous" if self.rate is None else "sampled"
+
+
+@dataclass(frozen=True, eq=False)
+class SimResult:
+    """Time series and diagnostics of one run.
+
+    Arrays: ``t`` (N,) [s]; ``q``, ``qd``, ``q_des``, ``u`` (N, n) [rad, rad/s, rad,
+    N m]; ``z`` (N, nz) controller state; ``yt_r_norm`` (N,) = ``||Y^T r||``.
+    ``e = q - q_des``.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    q_des: np.ndarray
+    u: np.ndarray
+    z: np.ndarray
+    yt_r_norm: np.ndarray
+    status: str
+    message: str
+    t_end: float
+    mode: str
+    engine: str
+    options: SimOptions
+    plant: str
+    controller: dict
+    trajectory: str
+    rhs_evals: int
+    steps: int
+    rejected_steps: int
+    wall_time_s: float
+    tv_exact: np.ndarray | None = field(default=None)
+    robot: dict = field(default_factory=dict)
+
+    @property
+    def e(self) -> np.ndarray:
+        """Tracking error q - q_d (N, n) [rad]."""
+        return self.q - self.q_des
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.q.shape[1]
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    def raise_for_status(self) -> "SimResult":
+        """Return self if the run finished; raise :class:`DivergenceError` (with ``.result``) if not."""
+        if not self.ok:
+            exc = DivergenceError(self.message)
+            exc.result = self
+            raise exc
+        return self
+
+
+def _limits(opt: SimOptions) -> np.ndarray:
+    return np.array([opt.q_max, opt.qd_max, opt.u_max])
+
+
+def _initial_state(n: int, law, trajectory, x0) -> np.ndarray:
+    z0 = law.initial_state()
+    if x0 is None:
+        q0, qd0, _ = trajectory.evaluate(0.0)  # start on the trajectory
+        x0 = np.concatenate([q0, qd0])
+    x0 = np.asarray(x0, dtype=float)
+    if x0.shape != (2 * n,) or not np.all(np.isfinite(x0)):
+        raise ParameterError(f"initial state must be {2 * n} finite numbers (q, qd), got {x0.tolist()}")
+    return np.concatenate([x0, z0])
+
+
+def _message(status: int, t_end: float, opt: SimOptions) -> str:
+    if status == S.OK:
+        return "ok"
+    bound = {S.QBOUND: f" ({opt.q_max:g} rad)", S.QDBOUND: f" ({opt.qd_max:g} rad/s)",
+             S.UBOUND: f" ({opt.u_max:g} N m)"}.get(status, "")
+    return f"diverged at t = {t_end:.6g} s: {S.STATUS_TEXT[status]}{bound}"
+
+
+def _engine(plant, law, opt: SimOptions) -> str:
+    fast_ok = plant.fast_engine is not None and law.code is not None
+    if opt.engine == "auto":
+        return "fast" if fast_ok else "python"
+    if opt.engine == "fast" and not fast_ok:
+        why = (f"robot {plant.name!r} has no compiled simulator" if plant.fast_engine is None
+               else f"law {law.name!r} has no compiled kernel")
+        raise ParameterError(f"engine 'fast' is not available: {why} (use engine 'python')")
+    return opt.engine
+
+
+def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None) -> SimResult:
+    """Simulate control law ``law`` on robot ``plant`` tracking ``trajectory``.
+
+    Parameters
+    ----------
+    plant : rc3r.robots.base.Robot
+        The true robot. The law never reads its parameters; it sees the plant only
+        through the regressor Y.
+    law : rc3r.controllers.Law
+        Any registered or user-defined law, with its own model theta (p,).
+    trajectory : rc3r.trajectory.Trajectory
+        With ``trajectory.n == plant.n``.
+    options : SimOptions
+    x0 : array_like (2 n,), optional
+        Initial (q, qd); default: on the trajectory at t = 0 (the paper's
+        "matching conditions").
+
+    Returns
+    -------
+    SimResult
+        With ``status == "ok"`` or the divergence message; never raises for a
+        diverging run (call :meth:`SimResult.raise_for_status` for that).
+    """
+    if trajectory.n != plant.n:
+        raise ParameterError(f"trajectory has {trajectory.n} joints, robot '{plant.label}' has {plant.n}")
+    if law.p != plant.p:
+        raise ParameterError(f"law {law.name!r} has {law.p} coefficients, robot '{plant.label}' has {plant.p}")
+    x0 = _initial_state(plant.n, law, trajectory, x0)
+    engine = _engine(plant, law, options)
+    if engine == "fast":
+        from ._fast import run
+    else:
+        from ._python import run
+    t0 = time.perf_counter()
+    out = run(plant, law, trajectory, replace(options, engine=engine), x0)
+    wall = time.perf_counter() - t0
+    return replace(out, wall_time_s=wall)
+
+
+def _result(plant, law, trajectory, opt, t, X, U, R, yn, status, t_end, nrhs, nsteps, nrej, tv=None):
+    n = plant.n
+    return SimResult(
+        t=t, q=X[:, 0:n].copy(), qd=X[:, n:2 * n].copy(), q_des=R.copy(), u=U.copy(), z=X[:, 2 * n:].copy(),
+        yt_r_norm=yn.copy(), status="ok" if status == S.OK else "diverged",
+        message=_message(status, t_end, opt), t_end=float(t_end), mode=opt.mode, engine=opt.engine,
+        options=opt, plant=plant.label, controller=law.describe(),
+        trajectory=trajectory.describe(), rhs_evals=int(nrhs), steps=int(nsteps),
+        rejected_steps=int(nrej), wall_time_s=0.0, tv_exact=tv, robot=plant.describe(),
+    )
+
+
+def _sample_grid(opt: SimOptions):
+    Ts = 1.0 / opt.rate
+    nsamples = int(round(opt.duration * opt.rate))
+    dec = max(1, int(round(opt.rate / opt.output_rate)))
+    return Ts, nsamples, dec

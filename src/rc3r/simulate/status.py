@@ -1,0 +1,41 @@
+"""Status codes of a simulation run, shared by every engine, and the compiled bound check.
+
+0 ok, 1 non-finite state, 2 |q| bound, 3 |qd| bound, 4 |u| bound, 5 mass matrix not
+positive definite, 6 step size underflow.
+"""
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+OK, NONFINITE, QBOUND, QDBOUND, UBOUND, NOTPD, HMIN = 0, 1, 2, 3, 4, 5, 6
+
+STATUS_TEXT = {
+    OK: "ok",
+    NONFINITE: "state became NaN or infinite",
+    QBOUND: "|q| exceeded its bound",
+    QDBOUND: "|qd| exceeded its bound",
+    UBOUND: "|u| exceeded its bound",
+    NOTPD: "plant mass matrix not positive definite",
+    HMIN: "integrator step size underflow",
+}
+
+
+@njit(cache=True, nogil=True)
+def check(x, u, lim):
+    """Status of state ``x = (q, qd, z)`` and torque ``u`` (n,) against ``lim = (q_max, qd_max, u_max)``."""
+    n = u.shape[0]
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            return NONFINITE
+    for i in range(n):
+        if abs(x[i]) > lim[0]:
+            return QBOUND
+        if abs(x[n + i]) > lim[1]:
+            return QDBOUND
+        if not math.isfinite(u[i]):
+            return NONFINITE
+        if abs(u[i]) > lim[2]:
+            return UBOUND
+    return OK
