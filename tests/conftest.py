@@ -21,14 +21,14 @@ def rng():
 @pytest.fixture(scope="session")
 def arm():
     """The committed ``urdf/rr3.urdf`` loaded and checked (params + Pinocchio model)."""
-    from rc3r.urdf import REPO_URDF, load_arm
+    from rc3r.robots.rr3.urdf import REPO_URDF, load_arm
 
     return load_arm(REPO_URDF)
 
 
 @pytest.fixture(scope="session")
 def table1():
-    from rc3r.params import table1
+    from rc3r.robots.rr3.params import table1
 
     return table1()
 
@@ -36,7 +36,7 @@ def table1():
 @pytest.fixture(scope="session")
 def th(arm):
     """theta (15,) of the committed URDF (Table 1)."""
-    from rc3r.params import theta
+    from rc3r.robots.rr3.params import theta
 
     return theta(arm.params)
 

@@ -5,11 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rc3r.controllers import Adaptive, FeedbackLinearization, PDGravity, Robust, RobustPerCoefficient
+from rc3r.controllers import (LAWS, Adaptive, FeedbackLinearization, Law, PDGravity, Robust,
+                              RobustPerCoefficient, default_gains, make_law, register_law)
 from rc3r.errors import ParameterError
-from rc3r.model import coriolis_matrix, gravity, mass_matrix
-from rc3r.params import theta
-from rc3r.regressor import slotine_li_regressor
+from rc3r.robots.rr3 import RR3
+from rc3r.robots.rr3.model import coriolis_matrix, gravity, mass_matrix
+from rc3r.robots.rr3.params import theta
+from rc3r.robots.rr3.regressor import slotine_li_regressor
 
 # Tolerance: the compiled kernel and the NumPy path do the same O(100) float operations in a
 # different order on magnitudes up to ~1e3 N m -> agreement to ~1e-12 relative; 1e-9 absolute is safe.
@@ -20,6 +22,12 @@ ATOL = 1e-9
 def state(rng):
     q, qd, qr, qdr, qddr = (rng.uniform(-2, 2, 3) for _ in range(5))
     return q, qd, qr, qdr, qddr
+
+
+def _u(c, table1, q, qd, qr, qdr, qddr, z=None):
+    """The law's torque on the 3R (its Python path, which calls the compiled kernel)."""
+    u, _, _ = c.torque(RR3(table1), q, qd, np.array([qr, qdr, qddr]), z)
+    return u
 
 
 def _slotine(q, qd, qr, qdr, qddr, lam, l2):
@@ -35,7 +43,7 @@ def test_fbl_is_computed_torque(table1, state):
     c = FeedbackLinearization(th, Kp=[100, 80, 60], Kd=[10, 20, 30])
     ar = qddr + c.Kd * (qdr - qd) + c.Kp * (qr - q)
     expected = mass_matrix(th, q) @ ar + coriolis_matrix(th, q, qd) @ qd + gravity(th, q, l2=l2)
-    np.testing.assert_allclose(c.torque(q, qd, qr, qdr, qddr, l2=l2), expected, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(_u(c, table1, q, qd, qr, qdr, qddr), expected, rtol=0, atol=ATOL)
 
 
 @pytest.mark.parametrize("eps", [1e-6, 0.5, 1e6], ids=["outside-layer", "paper-eps", "inside-layer"])
@@ -48,7 +56,7 @@ def test_robust_eq6(table1, state, eps):
     xi = Y.T @ r
     delta = -c.rho * xi / max(np.linalg.norm(xi), eps)
     expected = Y @ (c.theta + delta) - c.K * r
-    np.testing.assert_allclose(c.torque(q, qd, qr, qdr, qddr, l2=l2), expected, rtol=0, atol=ATOL * 1e3)
+    np.testing.assert_allclose(_u(c, table1, q, qd, qr, qdr, qddr), expected, rtol=0, atol=ATOL * 1e3)
 
 
 def test_robust_eq7_per_coefficient(table1, state, rng):
@@ -60,7 +68,7 @@ def test_robust_eq7_per_coefficient(table1, state, rng):
     Y, r = _slotine(q, qd, qr, qdr, qddr, c.Lambda, l2)
     xi = Y.T @ r
     expected = Y @ (th - rho_i * xi / np.maximum(np.abs(xi), eps_i)) - c.K * r
-    np.testing.assert_allclose(c.torque(q, qd, qr, qdr, qddr, l2=l2), expected, rtol=0, atol=ATOL * 1e3)
+    np.testing.assert_allclose(_u(c, table1, q, qd, qr, qdr, qddr), expected, rtol=0, atol=ATOL * 1e3)
 
 
 def test_adaptive_uses_estimate(table1, state, rng):
@@ -70,7 +78,7 @@ def test_adaptive_uses_estimate(table1, state, rng):
     c = Adaptive(th, Gamma=np.full(15, 3.0))
     z = th + rng.normal(size=15)
     Y, r = _slotine(q, qd, qr, qdr, qddr, c.Lambda, l2)
-    np.testing.assert_allclose(c.torque(q, qd, qr, qdr, qddr, z, l2=l2), Y @ z - c.K * r, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(_u(c, table1, q, qd, qr, qdr, qddr, z), Y @ z - c.K * r, rtol=0, atol=ATOL)
     np.testing.assert_array_equal(c.initial_state(), th)
 
 
@@ -78,7 +86,7 @@ def test_pd_gravity_hand_value(table1):
     """At q = 0 on the reference: u = g(0) = (0, g0 (theta14 + theta7/l2), g0 theta7/l2)
     = (0, 9.81 * (15 + 12), 9.81 * 12) = (0, 264.87, 117.72) N m for Table 1 (by hand)."""
     c = PDGravity(theta(table1))
-    u = c.torque(np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), l2=1.0)
+    u = _u(c, table1, *(np.zeros(3) for _ in range(5)))
     np.testing.assert_allclose(u, [0.0, 264.87, 117.72], rtol=0, atol=1e-12)
 
 
@@ -86,7 +94,7 @@ def test_robust_on_reference_with_exact_model_is_inverse_dynamics(table1):
     """On the reference (r = 0) the robust term vanishes: u = Y(q, qd, qd, qdd) theta0 (hand identity)."""
     th, l2 = theta(table1), table1.lengths[1]
     q, qd, qdd = np.array([0.3, -0.2, 0.5]), np.array([1.0, 0.0, 1.0]), np.array([0.0, -5.0, 0.0])
-    u = Robust(th).torque(q, qd, q, qd, qdd, l2=l2)
+    u = _u(Robust(th), table1, q, qd, q, qd, qdd)
     expected = mass_matrix(th, q) @ qdd + coriolis_matrix(th, q, qd) @ qd + gravity(th, q, l2=l2)
     np.testing.assert_allclose(u, expected, rtol=0, atol=ATOL)
 
@@ -107,3 +115,98 @@ def test_bad_gains_refused(table1, make):
     """Non-positive gains, eps <= 0, NaN/inf are refused with ParameterError."""
     with pytest.raises(ParameterError):
         make(theta(table1))
+
+
+class _ToyRobot:
+    """A 2-joint, 4-coefficient stand-in: the laws see a robot only through ``regressor``."""
+
+    n, p = 2, 4
+
+    @staticmethod
+    def regressor(q, qd, v, a):
+        return np.array([[a[0], qd[0] * v[1], np.sin(q[0]), 0.0],
+                         [0.0, a[1], np.cos(q[1]), v[0]]])
+
+
+@pytest.mark.parametrize("eps", [1e-6, 1e6], ids=["outside-layer", "inside-layer"])
+def test_robust_is_generic_over_n_and_p(rng, eps):
+    """Eq. (6) on a 2-joint, 4-coefficient regressor: u = Y (theta0 - rho xi / max(|xi|, eps)) - K r."""
+    robot = _ToyRobot()
+    th = rng.uniform(-2, 2, 4)
+    c = Robust(th, K=[3.0, 4.0], Lambda=7.0, rho=2.5, eps=eps)
+    q, qd, qr, qdr, qddr = (rng.uniform(-1, 1, 2) for _ in range(5))
+    e, ed = q - qr, qd - qdr
+    v, a, r = qdr - 7.0 * e, qddr - 7.0 * ed, ed + 7.0 * e
+    Y = robot.regressor(q, qd, v, a)
+    xi = Y.T @ r
+    expected = Y @ (th - 2.5 * xi / max(np.linalg.norm(xi), eps)) - np.array([3.0, 4.0]) * r
+    u, zdot, diag = c.torque(robot, q, qd, np.array([qr, qdr, qddr]))
+    np.testing.assert_allclose(u, expected, rtol=0, atol=1e-12)
+    assert zdot.size == 0 and diag == pytest.approx(np.linalg.norm(xi), rel=1e-14)
+
+
+def test_adaptive_rate_is_minus_gamma_yt_r(rng):
+    """d theta_hat/dt = -Gamma Y^T r, elementwise Gamma (p,), on the toy robot."""
+    robot = _ToyRobot()
+    gamma = np.array([1.0, 2.0, 3.0, 4.0])
+    c = Adaptive(np.zeros(4), Gamma=gamma, Lambda=2.0)
+    q, qd, qr, qdr, qddr = (rng.uniform(-1, 1, 2) for _ in range(5))
+    z = rng.uniform(-1, 1, 4)
+    e, ed = q - qr, qd - qdr
+    Y = robot.regressor(q, qd, qdr - 2.0 * e, qddr - 2.0 * ed)
+    _, zdot, _ = c.torque(robot, q, qd, np.array([qr, qdr, qddr]), z)
+    np.testing.assert_allclose(zdot, -gamma * (Y.T @ (ed + 2.0 * e)), rtol=0, atol=1e-13)
+
+
+def test_gains_of_the_wrong_size_are_refused():
+    """A 3-vector gain on a 2-joint robot is an error, not a silent broadcast."""
+    c = FeedbackLinearization(np.ones(4), Kp=[1.0, 2.0, 3.0])
+    with pytest.raises(ParameterError, match="entries"):
+        c.torque(_ToyRobot(), np.zeros(2), np.zeros(2), np.zeros((3, 2)))
+
+
+def test_registry_holds_the_five_laws_and_one_gain_table():
+    """Every built-in law is registered; the command line's defaults are the classes' defaults."""
+    assert set(LAWS) >= {"fbl", "robust", "robust-coeff", "adaptive", "pd"}
+    assert default_gains("pd") == {"Kp": 500.0, "Kd": 100.0}
+    assert default_gains("adaptive") == {"K": 100.0, "Lambda": 50.0, "Gamma": 10.0}
+    assert default_gains("robust") == {"K": 100.0, "Lambda": 50.0, "eps": 0.5}
+    assert PDGravity(np.ones(15)).Kp == 500.0 and Adaptive(np.ones(15)).Gamma[0] == 10.0
+
+
+def test_make_law_passes_bounds_only_to_laws_that_use_them_and_refuses_unknown_gains():
+    th = np.ones(15)
+    assert make_law("robust", th, rho=3.0, rho_i=np.ones(15)).rho == 3.0
+    assert not hasattr(make_law("fbl", th, rho=3.0), "rho")
+    with pytest.raises(ParameterError, match="no gain Kpp"):
+        make_law("fbl", th, Kpp=1.0)
+    with pytest.raises(ParameterError, match="unknown controller"):
+        make_law("nope", th)
+
+
+def test_a_law_in_plain_python_registers_and_runs():
+    """One class + one registration: a saturated-PD law written in Python is usable by name."""
+    from dataclasses import dataclass
+
+    @register_law
+    @dataclass(frozen=True, eq=False)
+    class SatPD(Law):
+        umax: float = 1.0
+        name = "test-sat-pd"
+
+        def signals(self, q, qd, ref):
+            n = len(q)
+            w = np.clip(10.0 * (ref[0] - q), -self.umax, self.umax)
+            return np.zeros(n), np.zeros(n), np.zeros(n), w
+
+        def output(self, Y, r, z):
+            return self.theta, np.zeros(0), 0.0
+
+    try:
+        law = make_law("test-sat-pd", np.zeros(4), umax=0.5)
+        u, _, _ = law.torque(_ToyRobot(), np.zeros(2), np.zeros(2), np.array([[1.0, -0.01], [0, 0], [0, 0]]))
+        np.testing.assert_allclose(u, [0.5, -0.1], atol=1e-15)
+        with pytest.raises(ParameterError, match="no compiled kernel"):
+            law.pack(2)
+    finally:
+        LAWS.pop("test-sat-pd", None)

@@ -7,25 +7,26 @@ import pytest
 
 from rc3r.controllers import Adaptive, FeedbackLinearization, PDGravity, Robust, RobustPerCoefficient
 from rc3r.errors import ParameterError
-from rc3r.plant import Plant
+from rc3r.robots.rr3 import RR3
+from rc3r.robots.rr3.paper import paper_box, paper_trajectory
 from rc3r.simulate import SimOptions, simulate
-from rc3r.trajectory import Quintic, paper_trajectory
-from rc3r.uncertainty import certified_bounds, certified_radius, paper_bounds, paper_box
+from rc3r.trajectory import Quintic
+from rc3r.uncertainty import certified_bounds, certified_radius, paper_bounds
 
 
 @pytest.fixture(scope="module")
 def plant(table1):
-    return Plant.from_params(table1)
+    return RR3.from_params(table1)
 
 
 @pytest.fixture(scope="module")
-def bounds(table1):
-    return paper_bounds(table1, paper_box())
+def bounds(plant):
+    return paper_bounds(plant, paper_box())
 
 
 def _controllers(bounds, table1):
     th0 = bounds.theta0
-    _, rho_i = certified_radius(certified_bounds(table1, paper_box()), th0)
+    _, rho_i = certified_radius(certified_bounds(RR3(table1), paper_box()), th0)
     return {
         "fbl": FeedbackLinearization(th0),
         "robust": Robust(th0, rho=bounds.rho, eps=0.5),

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from rc3r.errors import ConfigError
-from rc3r.trajectory import Quintic, Sines, paper_trajectory, trajectory_from_config
+from rc3r.robots.rr3.paper import paper_trajectory
+from rc3r.trajectory import Quintic, Sines, trajectory_from_config
 
 TRAJS = {
     "paper": paper_trajectory(),
@@ -63,4 +64,24 @@ def test_vector_time():
 ])
 def test_bad_trajectory_configs(cfg):
     with pytest.raises(ConfigError):
-        trajectory_from_config(cfg)
+        trajectory_from_config(cfg, paper_trajectory())
+
+
+def test_sines_with_any_number_of_joints():
+    """A 6-joint sine trajectory: q_d(t) = c + A sin(w t + phi) evaluated per joint, hand values."""
+    tr = Sines((0.0,) * 5 + (0.25,), ((6, 2.0, 3.0, 0.5), (2, 1.0, 1.0, 0.0)))
+    q, qd, qdd = tr.evaluate(0.7)
+    assert q.shape == (6,)
+    assert q[5] == pytest.approx(0.25 + 2.0 * np.sin(3.0 * 0.7 + 0.5), abs=1e-15)
+    assert qd[5] == pytest.approx(6.0 * np.cos(3.0 * 0.7 + 0.5), abs=1e-14)
+    assert qdd[1] == pytest.approx(-np.sin(0.7), abs=1e-15)
+    assert q[0] == 0.0 and q[3] == 0.0
+
+
+def test_quintic_with_two_joints_reaches_its_waypoints():
+    """Rest-to-rest: q_d(T) = waypoint, qd_d(T) = 0, and the midpoint is halfway (s(1/2) = 1/2)."""
+    tr = Quintic(((0.0, 1.0), (2.0, -1.0)), (2.0,))
+    q, qd, _ = tr.evaluate(2.0)
+    np.testing.assert_allclose(q, [2.0, -1.0], atol=1e-14)
+    np.testing.assert_allclose(qd, 0.0, atol=1e-14)
+    np.testing.assert_allclose(tr.evaluate(1.0)[0], [1.0, 0.0], atol=1e-14)

@@ -8,21 +8,26 @@ import numpy as np
 import pytest
 
 from rc3r.errors import ConfigError, ParameterError
-from rc3r.params import ArmParams, theta, theta_from_vector
+from rc3r.robots.rr3 import RR3
+from rc3r.robots.rr3.paper import paper_box
+from rc3r.robots.rr3.params import ArmParams, theta, theta_from_vector
+from rc3r.robots.rr3.robot import PARAM_NAMES
 from rc3r.uncertainty import (
-    PARAM_NAMES,
     Box,
-    _structure,
     certified_bounds,
-    load_box,
     paper_bounds,
-    paper_box,
     paper_upper,
     perturb,
     quadratic_box_extrema,
     sampled_rho,
     sampled_rho_detail,
 )
+from rc3r.uncertainty import load_box as _load_box
+from rc3r.uncertainty.bounds import _structure
+
+
+def load_box(path):
+    return _load_box(path, PARAM_NAMES)
 
 TABLE3 = np.array([164.25, -33.9, -19.1, -41.5, -54.8, -13, 28, -9, -34.8, -14.4, -27.4, 116.3, 71.2, 32.5, -5.5])
 PAPER_RHO = 186.8129
@@ -30,7 +35,7 @@ PAPER_RHO = 186.8129
 
 @pytest.fixture(scope="module")
 def cert(table1):
-    return certified_bounds(table1, paper_box())
+    return certified_bounds(RR3(table1), paper_box())
 
 
 def _one_line(exc_info):
@@ -43,7 +48,7 @@ def _one_line(exc_info):
 
 
 def test_table3_exact(table1):
-    b = paper_bounds(table1, paper_box())
+    b = paper_bounds(RR3(table1), paper_box())
     np.testing.assert_allclose(b.theta0, TABLE3, rtol=0, atol=1e-9)
     assert b.rho == pytest.approx(PAPER_RHO, abs=5e-5)
     assert b.rho == pytest.approx(np.linalg.norm(TABLE3 - theta(table1)), abs=1e-9)
@@ -53,7 +58,7 @@ def test_table3_exact(table1):
 
 def test_text_reading_all_inertia_entries_gives_another_table(table1):
     """The text perturbs every inertia entry; that does NOT reproduce Table 3 (docs/bounds.md)."""
-    b = paper_bounds(table1, paper_box(), inertia_keys="all")
+    b = paper_bounds(RR3(table1), paper_box(), inertia_keys="all")
     differs = np.flatnonzero(np.abs(b.theta0 - TABLE3) > 1e-6)
     # entries that contain Ixx, Ixy, Ixz or Iyz of links 2, 3: theta_2..5, 8..11
     assert (differs + 1).tolist() == [2, 3, 4, 5, 8, 9, 10, 11]
@@ -64,7 +69,7 @@ def test_text_reading_all_inertia_entries_gives_another_table(table1):
 
 def test_paper_inertia_keys_validated(table1):
     with pytest.raises(ConfigError) as e:
-        paper_bounds(table1, paper_box(), inertia_keys=("iyy", "Iqq"))
+        paper_bounds(RR3(table1), paper_box(), inertia_keys=("iyy", "Iqq"))
     _one_line(e)
 
 
@@ -73,7 +78,7 @@ def test_paper_inertia_keys_validated(table1):
 
 @pytest.mark.parametrize("lengths", [(1.0, 1.0, 1.0), (0.7, 1.3, 0.45)])
 def test_structure_decomposition_is_exact(rng, lengths):
-    S = _structure(lengths)
+    S = _structure(RR3(ArmParams.from_vector(np.ones(30), lengths)))
     v = rng.uniform(-2, 2, size=(500, 30))
     ref = theta_from_vector(v, lengths)
     np.testing.assert_allclose(S.evaluate(v), ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
@@ -139,7 +144,7 @@ def test_certified_on_another_robot_and_box(rng):
     lo = -rng.uniform(0, 0.5, 30)
     hi = rng.uniform(0, 0.5, 30)
     box = Box(lo, hi)
-    b = certified_bounds(p, box)
+    b = certified_bounds(RR3(p), box)
     th = theta_from_vector(vec + box.sample(rng, 5000), p.lengths)
     assert np.all(th >= b.theta_lo - 1e-9) and np.all(th <= b.theta_hi + 1e-9)
     np.testing.assert_allclose(np.diag(theta_from_vector(b.witness_lo, p.lengths)), b.theta_lo, atol=1e-9)
@@ -147,26 +152,26 @@ def test_certified_on_another_robot_and_box(rng):
 
 
 def test_zero_box_gives_zero_radius(table1):
-    b = certified_bounds(table1, Box.zero())
+    b = certified_bounds(RR3(table1), Box.zero(PARAM_NAMES))
     np.testing.assert_allclose(b.rho_i, 0.0, atol=1e-12)
     np.testing.assert_allclose(b.theta0, theta(table1), atol=1e-12)
     assert b.rho <= 1e-12
-    assert paper_bounds(table1, Box.zero()).rho == 0.0
+    assert paper_bounds(RR3(table1), Box.zero(PARAM_NAMES)).rho == 0.0
 
 
 def test_rho_max_bounds_sampled_rho(table1, cert):
-    s = sampled_rho_detail(table1, cert.box, cert.theta0, n=5000, seed=3)
+    s = sampled_rho_detail(RR3(table1), cert.box, cert.theta0, n=5000, seed=3)
     assert 0 < s.rho <= cert.rho
     assert np.all(cert.box.contains(s.witness - table1.to_vector()))
     assert np.linalg.norm(theta_from_vector(s.witness, table1.lengths) - cert.theta0) == pytest.approx(s.rho, abs=1e-12)
     assert s.rho >= cert.rho_i.max()  # each rho_i alone is attained
-    assert sampled_rho(table1, cert.box, cert.theta0, n=5000, seed=3) == s.rho  # reproducible
+    assert sampled_rho(RR3(table1), cert.box, cert.theta0, n=5000, seed=3) == s.rho  # reproducible
 
 
 def test_paper_rho_does_not_cover_the_box(table1):
     """The paper's rho is ||theta_0 - theta(p)||: some robot of the box is farther from theta_0."""
-    a = paper_bounds(table1, paper_box())
-    s = sampled_rho_detail(table1, a.box, a.theta0, n=2000, seed=0)
+    a = paper_bounds(RR3(table1), paper_box())
+    s = sampled_rho_detail(RR3(table1), a.box, a.theta0, n=2000, seed=0)
     assert s.rho > a.rho + 1.0
 
 
@@ -175,7 +180,7 @@ def test_paper_rho_does_not_cover_the_box(table1):
 
 def test_paper_box_file():
     box = paper_box()
-    assert box == Box.uniform(mass=(0, 10), com=(0, 1), inertia=(0, 1))
+    assert box == Box.uniform(PARAM_NAMES, mass=(0, 10), com=(0, 1), inertia=(0, 1))
     assert box.upper[PARAM_NAMES.index("Ixy2")] == 1.0  # every inertia entry, as the text says
 
 
@@ -212,7 +217,7 @@ def test_box_toml_defaults_and_overrides(tmp_path):
         ("title = 'x'", ConfigError, "unknown top-level"),
         ("description = 'x'", ConfigError, "missing key 'delta'"),
         ("[[link]]\nm = [0, 1]", ConfigError, "lacks 'index'"),
-        ("[[link]]\nindex = 4\nm = [0, 1]", ConfigError, "index must be 1, 2 or 3"),
+        ("[[link]]\nindex = 4\nm = [0, 1]", ConfigError, "index must be one of 1, 2, 3"),
         ("[delta]\nmass = [nan, 1]", ParameterError, "not finite for m1"),
         ("[delta]\ncom = [1, 0]", ParameterError, "rcx1 is empty: lower 1 > upper 0"),
     ],
@@ -235,12 +240,12 @@ def test_bad_box_objects(table1):
     ok = np.zeros(30)
     for lo, hi in ((np.full(30, np.nan), ok), (ok, np.r_[ok[:29], np.inf]), (np.ones(30), ok), (ok[:29], ok[:29])):
         with pytest.raises(ParameterError) as e:
-            Box(lo, hi)
+            Box(lo, hi, PARAM_NAMES)
         _one_line(e)
-    neg = Box(np.r_[-10.0, np.zeros(29)], np.zeros(30))  # m1 may reach 0 kg
+    neg = Box(np.r_[-10.0, np.zeros(29)], np.zeros(30), PARAM_NAMES)  # m1 may reach 0 kg
     for fn in (certified_bounds, paper_bounds):
         with pytest.raises(ParameterError) as e:
-            fn(table1, neg)
+            fn(RR3(table1), neg)
         assert "non-positive mass for link 1" in _one_line(e)
 
 
@@ -250,28 +255,30 @@ def test_bad_box_objects(table1):
 def test_perturb_specs(table1):
     box = paper_box()
     nom = table1.to_vector()
-    assert perturb(table1, box, "nominal") is table1
-    np.testing.assert_array_equal(perturb(table1, box, "upper").to_vector(), nom + box.upper)
-    np.testing.assert_array_equal(perturb(table1, box, "lower").to_vector(), nom + box.lower)
-    up = perturb(table1, box, "paper-upper")
-    assert up == paper_upper(table1, box)
-    np.testing.assert_allclose((theta(table1) + theta(up)) / 2, TABLE3, atol=1e-9)
+    rr = RR3(table1)
+    assert perturb(rr, box, "nominal") is rr
+    np.testing.assert_array_equal(perturb(rr, box, "upper").standard_parameters(), nom + box.upper)
+    np.testing.assert_array_equal(perturb(rr, box, "lower").standard_parameters(), nom + box.lower)
+    up = perturb(rr, box, "paper-upper")
+    assert up.params == paper_upper(rr, box).params
+    np.testing.assert_allclose((theta(table1) + up.theta) / 2, TABLE3, atol=1e-9)
     bits = "1000000000" + "0110000000" + "0000000001"
-    c = perturb(table1, box, "corner:" + bits).to_vector() - nom
+    c = perturb(rr, box, "corner:" + bits).standard_parameters() - nom
     np.testing.assert_array_equal(np.flatnonzero(c), [0, 11, 12, 29])
-    assert perturb(table1, box, "corner:" + "_".join([bits[:10], bits[10:20], bits[20:]])) == perturb(
-        table1, box, "corner:" + bits)
-    r1, r2 = perturb(table1, box, "random:7"), perturb(table1, box, "random:7")
-    assert r1 == r2 and r1 != perturb(table1, box, "random:8")
-    assert box.contains(r1.to_vector() - nom)
-    assert r1.lengths == table1.lengths and r1.g0 == table1.g0
+    assert perturb(rr, box, "corner:" + "_".join([bits[:10], bits[10:20], bits[20:]])).params == perturb(
+        rr, box, "corner:" + bits).params
+    r1, r2 = perturb(rr, box, "random:7"), perturb(rr, box, "random:7")
+    assert r1.params == r2.params and r1.params != perturb(rr, box, "random:8").params
+    assert r1.label == "random:7"
+    assert box.contains(r1.standard_parameters() - nom)
+    assert r1.params.lengths == table1.lengths and r1.params.g0 == table1.g0
 
 
 @pytest.mark.parametrize("spec", ["", "uper", "corner:0101", "corner:" + "2" * 30, "random:x", "random:-1",
                                   "upper:1", None])
 def test_bad_perturb_spec(table1, spec):
     with pytest.raises(ConfigError) as e:
-        perturb(table1, paper_box(), spec)
+        perturb(RR3(table1), paper_box(), spec)
     _one_line(e)
 
 
@@ -310,9 +317,9 @@ def test_certified_radius(table1, cert):
     rho, rho_i = certified_radius(cert, cert.theta0)
     assert rho == pytest.approx(cert.rho, rel=1e-14)
     np.testing.assert_allclose(rho_i, cert.rho_i, atol=1e-12)
-    a = paper_bounds(table1, paper_box())
+    a = paper_bounds(RR3(table1), paper_box())
     rho_a, _ = certified_radius(cert, a.theta0)
-    s = sampled_rho_detail(table1, cert.box, a.theta0, n=2000, seed=0)
+    s = sampled_rho_detail(RR3(table1), cert.box, a.theta0, n=2000, seed=0)
     assert cert.rho <= rho_a and s.rho <= rho_a
     with pytest.raises(ParameterError):
         certified_radius(a, a.theta0)
@@ -320,16 +327,15 @@ def test_certified_radius(table1, cert):
 
 def test_perturb_simulable(table1):
     """Most random robots of the paper's box have a non-PD inertia; simulable=True redraws."""
-    from rc3r.params import physical_issues
-
     box = paper_box()
-    assert any("positive definite" in s for s in physical_issues(perturb(table1, box, "random:0")))
-    r = perturb(table1, box, "random:0", simulable=True)
-    assert not [s for s in physical_issues(r) if "triangle" not in s]
-    assert box.contains(r.to_vector() - table1.to_vector())
-    assert r == perturb(table1, box, "random:0", simulable=True)
+    rr = RR3(table1)
+    assert any("positive definite" in s for s in perturb(rr, box, "random:0").physical_issues())
+    r = perturb(rr, box, "random:0", simulable=True)
+    assert not [s for s in r.physical_issues() if "triangle" not in s]
+    assert box.contains(r.standard_parameters() - table1.to_vector())
+    assert r.params == perturb(rr, box, "random:0", simulable=True).params
     for spec in ("upper", "lower", "paper-upper"):
-        perturb(table1, box, spec, simulable=True)
+        perturb(rr, box, spec, simulable=True)
     with pytest.raises(ParameterError) as e:  # Ixx2 = Iyy2 = 0.5 with Ixy2 = 1.2
-        perturb(table1, box, "corner:" + "0" * 17 + "1" + "0" * 12, simulable=True)
+        perturb(rr, box, "corner:" + "0" * 17 + "1" + "0" * 12, simulable=True)
     assert "not simulable" in _one_line(e)

@@ -6,10 +6,13 @@ import json
 import numpy as np
 import pytest
 
+import rc3r.cli.model as cli_model
 import rc3r.verify as verify
+from rc3r.robots.rr3 import RR3
+from rc3r.robots.rr3 import regressor as reg
 from rc3r.cli import main
-from rc3r.params import ArmParams, LinkParams, theta, theta_from_vector
-from rc3r.urdf import REPO_URDF, load_arm, write_urdf
+from rc3r.robots.rr3.params import ArmParams, LinkParams, theta, theta_from_vector
+from rc3r.robots.rr3.urdf import REPO_URDF, load_arm, write_urdf
 
 CHECKS = {
     "M_vs_crba", "S_vs_coriolis_matrix", "Sqd_vs_rnea", "g_vs_gravity", "Y_theta_vs_rnea",
@@ -38,7 +41,7 @@ def _other_arms():
 
 @pytest.fixture(scope="module")
 def table1_report():
-    return verify.verify_model(REPO_URDF)
+    return verify.verify_model(RR3.from_urdf(REPO_URDF))
 
 
 def test_committed_urdf_passes_every_check(table1_report):
@@ -67,7 +70,7 @@ def test_generated_robots_pass(tmp_path, which):
     """Any URDF of this structure passes: two generated arms (write_urdf) with other parameters."""
     p = _other_arms()[which]
     path = write_urdf(p, tmp_path / f"{p.name}.urdf")
-    r = verify.verify_model(path, samples=200, seed=3)
+    r = verify.verify_model(RR3.from_urdf(path), samples=200, seed=3)
     assert r.passed, {n: c for n, c in r.checks.items() if not c.passed}
     assert all(c.max_rel_err <= MAX_REL for c in r.checks.values())
     assert r.warnings == ()  # physically consistent
@@ -102,8 +105,8 @@ def test_text_output_table_and_exit_code(capsys):
 
 def test_same_seed_same_report():
     """Reproducible: the same seed gives identical errors."""
-    a = verify.verify_model(REPO_URDF, samples=30, seed=7)
-    b = verify.verify_model(REPO_URDF, samples=30, seed=7)
+    a = verify.verify_model(RR3.from_urdf(REPO_URDF), samples=30, seed=7)
+    b = verify.verify_model(RR3.from_urdf(REPO_URDF), samples=30, seed=7)
     assert a.checks == b.checks
 
 
@@ -130,15 +133,15 @@ def test_compare_fails_on_nan():
 def test_wrong_theta_fails_the_checks(monkeypatch, capsys):
     """theta computed with a wrong l3 (1.1 instead of 1) makes the run FAIL and exit 1.
 
-    verify_model computes theta through ``rc3r.verify.theta_of``; patching it feeds
-    the closed form a theta of the wrong robot while Pinocchio uses the URDF.
+    Patching ``RR3.theta`` feeds the closed form a theta of the wrong robot while Pinocchio
+    uses the URDF.
     """
     def wrong_theta(p):
         l1, l2, l3 = p.lengths
         return theta_from_vector(p.to_vector(), (l1, l2, l3 + 0.1))
 
-    monkeypatch.setattr(verify, "theta_of", wrong_theta)
-    r = verify.verify_model(REPO_URDF, samples=50)
+    monkeypatch.setattr(RR3, "theta", property(lambda self: wrong_theta(self.params)))
+    r = verify.verify_model(RR3.from_urdf(REPO_URDF), samples=50)
     assert not r.passed
     for name in ("M_vs_crba", "Y_theta_vs_rnea", "Ysl_theta_vs_pinocchio", "theta_least_squares",
                  "g_vs_gravity", "skew_symmetry"):
@@ -157,7 +160,7 @@ def test_perturbed_theta_fails_comparison_with_rnea(arm, rng):
     th = theta(arm.params)
     st = verify.sample_states(20, seed=1)
     l2 = arm.params.lengths[1]
-    Y = verify.reg.regressor(st["q"], st["qd"], st["qdd"], l2=l2)
+    Y = reg.regressor(st["q"], st["qd"], st["qdd"], l2=l2)
     data = arm.model.createData()
     ref = np.array([pin.rnea(arm.model, data, st["q"][n], st["qd"][n], st["qdd"][n]) for n in range(20)])
     assert verify.compare(Y @ th, ref).passed
@@ -169,7 +172,7 @@ def test_perturbed_theta_fails_comparison_with_rnea(arm, rng):
 def test_minimality_fails_for_rank_deficient_regressor(arm):
     """Dropping one theta column (rank 14) fails the minimality check."""
     st = verify.sample_states(50, seed=2)
-    Y = verify.reg.regressor(st["q"], st["qd"], st["qdd"], l2=arm.params.lengths[1]).reshape(-1, 15)
+    Y = reg.regressor(st["q"], st["qd"], st["qdd"], l2=arm.params.lengths[1]).reshape(-1, 15)
     assert verify.check_minimality(arm.model, Y, st).passed
     Yd = Y.copy()
     Yd[:, 4] = 0.0
@@ -181,10 +184,10 @@ def test_json_is_strict_even_with_nan():
     """Non-finite errors are written as null, and the overall pass is false."""
     bad = verify.Check(float("nan"), float("nan"), 1e-9, False)
     rep = verify.VerifyReport(urdf="x", theta=(0.0,) * 15, checks={"M_vs_crba": bad}, passed=False)
-    text = json.dumps(verify.report_to_dict(rep), allow_nan=False)
+    text = json.dumps(cli_model.report_to_dict(rep), allow_nan=False)
     obj = json.loads(text)
     assert obj["checks"]["M_vs_crba"]["max_rel_err"] is None and obj["pass"] is False
-    assert "FAIL" in verify.render_text(rep).splitlines()[-1]
+    assert "FAIL" in cli_model.render_text(rep).splitlines()[-1]
 
 
 def test_load_arm_default_is_committed_urdf():
@@ -194,6 +197,6 @@ def test_load_arm_default_is_committed_urdf():
 
 def test_few_samples_still_identify_theta():
     """--samples 1: the identification checks (lstsq, minimality) still stack 200 states and pass."""
-    r = verify.verify_model(REPO_URDF, samples=1)
+    r = verify.verify_model(RR3.from_urdf(REPO_URDF), samples=1)
     assert r.passed
     assert "200 states" in r.checks["minimality"].detail

@@ -110,7 +110,7 @@ class Law:
     theta: np.ndarray
     name = "?"
     code = None
-    model_inputs: tuple = ()
+    model_inputs = ()
 
     def __post_init__(self):
         th = _array("theta", self.theta)

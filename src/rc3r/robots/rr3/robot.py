@@ -59,6 +59,13 @@ class RR3(Robot):
         return cls(table1(), "nominal")
 
     @classmethod
+    def from_params(cls, params: ArmParams, label: str = "nominal") -> "RR3":
+        """A plant of parameters ``params``; ParameterError for a mass <= 0 or a non-PD inertia."""
+        robot = cls(params, label)
+        robot.require_simulable()
+        return robot
+
+    @classmethod
     def from_urdf(cls, path=None, label: str | None = None) -> "RR3":
         """A URDF of this arm (default: the committed ``urdf/rr3.urdf``); UrdfError if it is not."""
         from .urdf import load_arm

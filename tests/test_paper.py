@@ -1,4 +1,4 @@
-"""`rc3r run`, `rc3r paper`, `rc3r sweep-eps` in-process: outputs, the paper's claims, bad input."""
+"""rc3r.robots.rr3.paper and `rc3r run` / `rc3r paper` / `rc3r sweep-eps` in-process: outputs, claims, bad input."""
 from __future__ import annotations
 
 import json
@@ -6,7 +6,10 @@ import json
 import pytest
 
 from rc3r.cli import main
-from rc3r.scenarios import _claims, execute, paper_scenarios
+from rc3r.robots.rr3.paper import PAPER_SAMPLED_RATE
+from rc3r.robots.rr3.paper import claims as _claims
+from rc3r.robots.rr3.paper import scenarios as paper_scenarios
+from rc3r.study import execute
 
 REQUIRED = ["controller", "plant", "mode", "theta_model", "rho", "eps", "max_abs_error", "rms_error",
             "final_error_bound", "max_abs_torque", "chattering", "wall_time_s", "seed"]
@@ -119,8 +122,6 @@ def test_paper_claims_continuous():
 def test_paper_claims_sampled_chattering():
     """At the paper's sampled rate (100 kHz ZOH) eps 0.05 chatters (>= 2x) and still has smaller error.
     2 s are enough: the eps = 0.05 loop chatters from the first milliseconds."""
-    from rc3r.scenarios import PAPER_SAMPLED_RATE
-
     specs = [s for s in paper_scenarios(duration=2.0, rate=PAPER_SAMPLED_RATE) if s.name.startswith("robust-pert")]
     by = {s.name: execute(s)[1] for s in specs}
     assert sum(by["robust-perturbed-eps0.05"]["chattering"]) > 2 * sum(by["robust-perturbed"]["chattering"])

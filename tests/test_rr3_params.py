@@ -1,11 +1,11 @@
-"""rc3r.params: Table 1 -> Table 2, theta broadcasting, physical checks, TOML loading."""
+"""rc3r.robots.rr3.params: Table 1 -> Table 2, theta broadcasting, physical checks, TOML loading."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 from rc3r.errors import ConfigError, ParameterError
-from rc3r.params import (
+from rc3r.robots.rr3.params import (
     STD_NAMES,
     ArmParams,
     LinkParams,

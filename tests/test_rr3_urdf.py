@@ -1,4 +1,4 @@
-"""rc3r.urdf: the committed URDF, round trips URDF <-> ArmParams, and refusals of other robots."""
+"""rc3r.robots.rr3.urdf: the committed URDF, round trips URDF <-> ArmParams, and refusals of other robots."""
 from __future__ import annotations
 
 import glob
@@ -10,8 +10,8 @@ import pytest
 
 from rc3r.cli import main
 from rc3r.errors import UrdfError
-from rc3r.params import ArmParams, LinkParams
-from rc3r.urdf import REPO_URDF, load_arm, make_urdf, write_urdf
+from rc3r.robots.rr3.params import ArmParams, LinkParams
+from rc3r.robots.rr3.urdf import REPO_URDF, load_arm, make_urdf, write_urdf
 
 #: Parameters survive URDF text (repr of float64, exact) and Pinocchio's
 #: lever/inertia conversion plus our inverse rotation by R_i (a handful of

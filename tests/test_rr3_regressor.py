@@ -1,4 +1,4 @@
-"""rc3r.regressor: Y theta against Pinocchio, on Table 1 and on random physical robots (hypothesis).
+"""rc3r.robots.rr3.regressor: Y theta against Pinocchio, on Table 1 and on random physical robots (hypothesis).
 
 Error measure and TOL = 1e-9 as in tests/test_model.py and ``rc3r verify-model``:
 ``max|x - ref| <= TOL * max(1, max|ref|)``; rounding of the O(100)-term sums is
@@ -15,10 +15,10 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from _helpers import TOL, assert_close  # noqa: E402  (tests/ is on sys.path under pytest)
-from rc3r import model as mdl
-from rc3r import regressor as reg
-from rc3r.params import ArmParams, LinkParams, physical_issues, theta
-from rc3r.urdf import model_from_params  # make_urdf text -> Pinocchio, gravity (0, 0, -g0)
+from rc3r.robots.rr3 import model as mdl
+from rc3r.robots.rr3 import regressor as reg
+from rc3r.robots.rr3.params import ArmParams, LinkParams, physical_issues, theta
+from rc3r.robots.rr3.urdf import model_from_params  # make_urdf text -> Pinocchio, gravity (0, 0, -g0)
 
 
 #: Reproducible property tests: a fixed example sequence (derandomize), no
@@ -206,7 +206,7 @@ def test_inverse_dynamics_equals_regressor_times_theta_and_rnea(arm, th, pdata, 
     """inverse_dynamics (M qdd + S qd + g from the term kernels) == Y(q, qd, qdd) theta == pinocchio.rnea."""
     import pinocchio as pin
 
-    from rc3r.regressor import inverse_dynamics, regressor
+    from rc3r.robots.rr3.regressor import inverse_dynamics, regressor
 
     l2 = arm.params.lengths[1]
     Q, QD, QDD = rng.uniform(-3, 3, (3, 40, 3))

@@ -1,4 +1,4 @@
-"""The closed-form plant equals Pinocchio's ABA plant, at random states and over a whole run."""
+"""rc3r.robots.rr3.robot: RR3 as a Robot; its closed-form plant equals Pinocchio's ABA plant."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,14 +7,14 @@ from scipy.integrate import solve_ivp
 
 from rc3r.controllers import FeedbackLinearization
 from rc3r.errors import ParameterError
-from rc3r.plant import Plant
-from rc3r.trajectory import paper_trajectory
-from rc3r.uncertainty import paper_bounds, paper_box, perturb
+from rc3r.robots.rr3 import RR3
+from rc3r.robots.rr3.paper import paper_box, paper_trajectory
+from rc3r.uncertainty import paper_bounds, perturb
 
 
 @pytest.fixture(scope="module")
 def plant(table1):
-    return Plant.from_params(table1)
+    return RR3.from_params(table1)
 
 
 def test_forward_dynamics_equals_aba(plant, rng):
@@ -30,13 +30,12 @@ def test_forward_dynamics_equals_aba(plant, rng):
 def test_closed_form_plant_follows_pinocchio_over_a_whole_run(plant, table1):
     """Same controller (FBL with theta_0), same integrator (DOP853, rtol 1e-12), 10 s of the paper's
     trajectory: the closed-form plant and the ABA plant stay within 1e-8 rad."""
-    th0 = paper_bounds(table1, paper_box()).theta0
-    ctrl, tr, l2 = FeedbackLinearization(th0), paper_trajectory(), table1.lengths[1]
+    th0 = paper_bounds(plant, paper_box()).theta0
+    ctrl, tr = FeedbackLinearization(th0), paper_trajectory()
 
     def rhs(fd):
         def f(t, x):
-            qr, qdr, qddr = tr.evaluate(t)
-            u = ctrl.torque(x[:3], x[3:], qr, qdr, qddr, l2=l2)
+            u, _, _ = ctrl.torque(plant, x[:3], x[3:], np.array(tr.evaluate(t)))
             return np.concatenate([x[3:], fd(x[:3], x[3:], u)])
         return f
 
@@ -50,8 +49,9 @@ def test_closed_form_plant_follows_pinocchio_over_a_whole_run(plant, table1):
 
 def test_perturbed_plants_differ_and_refuse_nonphysical(table1):
     """'upper' is a different robot; a non-PD inertia is refused with a ParameterError."""
-    up = Plant.from_params(perturb(table1, paper_box(), "upper"), label="upper")
-    assert np.abs(up.theta - Plant.from_params(table1).theta).max() > 1.0
+    up = perturb(RR3(table1), paper_box(), "upper")
+    assert up.label == "upper"
+    assert np.abs(up.theta - RR3.from_params(table1).theta).max() > 1.0
     bad = table1.links[1].__class__(1.0, 10.0, (0, 0, 0), (0.5, 0.5, 0.5, 1.2, 0.0, 0.0))
     with pytest.raises(ParameterError, match="positive definite"):
-        Plant.from_params(table1.with_links(links=(table1.links[0], bad, table1.links[2])))
+        RR3.from_params(table1.with_links(links=(table1.links[0], bad, table1.links[2])))

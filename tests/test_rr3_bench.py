@@ -16,7 +16,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rc3r import bench
+from rc3r.cli import bench as cli_bench
+from rc3r.robots.rr3 import RR3
+from rc3r.robots.rr3 import bench
 from rc3r.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
@@ -93,7 +95,7 @@ def test_quick_skips_the_subprocess_measurements(quick):
 
 def test_text_output_renders_tables_and_targets(quick):
     _, r, _ = quick
-    text = bench.render_text(r)
+    text = cli_bench.render_text(r)
     for word in ("operation", "pin.rnea loop", "inverse_dynamics batch", "scenario", "rhs evals",
                  "Targets:", "robust-perturbed@1kHz", "diverged"):
         assert word in text, word
@@ -109,9 +111,9 @@ def test_compare_flags_a_wrong_result():
 
 def test_a_failed_check_makes_the_command_fail(monkeypatch, capsys):
     fake = {"checks_ok": False, "checks": {}}
-    monkeypatch.setattr(bench, "run_bench", lambda quick=False: fake)
-    monkeypatch.setattr(bench, "render_text", lambda r: "table")
-    assert bench.cmd_bench(SimpleNamespace(json=False, quick=True)) == 1
+    monkeypatch.setattr(RR3, "benchmark", classmethod(lambda cls, quick=False: fake))
+    monkeypatch.setattr(cli_bench, "render_text", lambda r: "table")
+    assert cli_bench.cmd_bench(SimpleNamespace(json=False, quick=True)) == 1
     assert "disagrees with Pinocchio" in capsys.readouterr().err
 
 

@@ -1,4 +1,4 @@
-"""rc3r.model: M, S, g against Pinocchio, their structural properties, and the paper's typos.
+"""rc3r.robots.rr3.model: M, S, g against Pinocchio, their structural properties, and the paper's typos.
 
 Error measure (as in ``rc3r verify-model``, docs/conventions.md):
 ``max|x - ref| <= TOL * max(1, max|ref|)``. TOL = 1e-9: every entry is a sum of
@@ -15,9 +15,9 @@ import pinocchio as pin
 import pytest
 
 from _helpers import TOL, assert_close  # noqa: E402  (tests/ is on sys.path under pytest)
-from rc3r import model as mdl
-from rc3r.params import ArmParams, LinkParams, theta
-from rc3r.urdf import model_from_params  # make_urdf text -> Pinocchio, gravity (0, 0, -g0)
+from rc3r.robots.rr3 import model as mdl
+from rc3r.robots.rr3.params import ArmParams, LinkParams, theta
+from rc3r.robots.rr3.urdf import model_from_params  # make_urdf text -> Pinocchio, gravity (0, 0, -g0)
 
 N_STATES = 50
 
