@@ -111,7 +111,7 @@ def test_compare_flags_a_wrong_result():
 
 def test_a_failed_check_makes_the_command_fail(monkeypatch, capsys):
     fake = {"checks_ok": False, "checks": {}}
-    monkeypatch.setattr(RR3, "benchmark", classmethod(lambda cls, quick=False: fake))
+    monkeypatch.setattr(RR3, "benchmark", classmethod(lambda cls, quick=False, progress=None: fake))
     monkeypatch.setattr(cli_bench, "render_text", lambda r: "table")
     assert cli_bench.cmd_bench(SimpleNamespace(json=False, quick=True)) == 1
     assert "disagrees with Pinocchio" in capsys.readouterr().err

@@ -3,30 +3,51 @@
 Public API (everything a script or notebook needs)::
 
     import rc3r
-    arm = rc3r.load_robot("rr3")                       # the paper's arm, Table 1
-    law = rc3r.make_law("robust", theta0, rho=rho)     # any registered law
-    res = rc3r.simulate(plant, law, arm.default_trajectory())
+    spec = rc3r.build_run(controller="robust", perturbed=True)   # the paper's perturbed scenario
+    res = rc3r.simulate(spec.plant, spec.law, spec.trajectory)  # or: res, metrics = rc3r.execute(spec)
+    arm = rc3r.load_robot()                                     # the nominal robot (Table 1)
+    law = rc3r.make_law("fbl", arm.theta)                       # any registered law
 
-Module map (one concept each; ``docs/architecture.md`` has the same map):
+Module map (one concept each; ``docs/architecture.md`` has the same map with more words):
 
-==============================  ===============================================================
-``rc3r.robots.base``            the robot contract (:class:`Robot`): n, p, theta, Y(q, qd, v, a)
-``rc3r.robots``                 registry of robots (:func:`load_robot`, :data:`ROBOTS`)
-``rc3r.robots.rr3``             the paper's 3R arm: params, closed-form kernels, model,
-                                regressor, URDF, compiled engine, the paper's study, bench
-``rc3r.controllers``            control laws u = Y theta_eff + w, registry (:func:`make_law`)
-``rc3r.controllers._kernels``   compiled kernels of the built-in laws (generic over n, p)
-``rc3r.trajectory``             desired trajectories (sines, quintic), compiled evaluation
-``rc3r.uncertainty``            boxes (``box``), theta_0/rho (``bounds``), lower bound (``sampled``)
-``rc3r.simulate``               :func:`simulate`, options, result; engines ``_fast``, ``_python``;
-                                ``metrics``; ``status``
-``rc3r.study``                  a run as data (:class:`RunSpec`), :func:`build_run`, :func:`execute`
-``rc3r.verify``                 checks of a robot against Pinocchio
-``rc3r.plotting``               figures (no backend switch)
-``rc3r.io``                     atomic file output, TOML reading
-``rc3r.errors``                 exception types (one-line errors on the command line)
-``rc3r.cli``                    the command line: the only place that parses, prints, exits
-==============================  ===============================================================
+=================================  ==============================================================
+``rc3r``                           this public API
+``rc3r.robots``                    registry of robots: :func:`load_robot`, :data:`ROBOTS`
+``rc3r.robots.base``               the robot contract :class:`Robot`: n, p, theta, Y(q, qd, v, a)
+``rc3r.robots.rr3``                the paper's 3R arm (everything that names it)
+``rc3r.robots.rr3.params``         link parameters (paper convention), theta, Table 1
+``rc3r.robots.rr3.kernels``        compiled closed-form M, S, g, Y (numba)
+``rc3r.robots.rr3._batch``         shape handling of the closed-form functions
+``rc3r.robots.rr3.model``          closed-form M, S, g
+``rc3r.robots.rr3.regressor``      closed-form Slotine--Li and inverse-dynamics regressors
+``rc3r.robots.rr3.urdf``           URDF writer and reader with the DH structure checks
+``rc3r.robots.rr3.robot``          :class:`RR3`, the contract's implementation
+``rc3r.robots.rr3.engine``         the compiled closed-loop simulator
+``rc3r.robots.rr3.paper``          the paper's box, gains, trajectory, scenarios, claims
+``rc3r.robots.rr3.bench``          closed form vs Pinocchio, simulation timings
+``rc3r.controllers``               control laws u = Y theta_eff + w and their registry
+``rc3r.controllers._kernels``      compiled kernels of the built-in laws (generic over n, p)
+``rc3r.trajectory``                desired trajectories (sines, quintic), compiled evaluation
+``rc3r.uncertainty``               parameter uncertainty (re-exports the three below)
+``rc3r.uncertainty.box``           boxes on standard parameters, box files, perturbed plants
+``rc3r.uncertainty.bounds``        theta_0 and rho: the paper's method, certified exact ranges
+``rc3r.uncertainty.sampled``       sampled lower bound on max ||theta - theta_0||
+``rc3r.simulate``                  :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
+``rc3r.simulate._fast``            the ``fast`` engine (a robot's compiled simulator)
+``rc3r.simulate._python``          the ``python`` and ``reference`` engines (any robot, any law)
+``rc3r.simulate.metrics``          scalar metrics of a run
+``rc3r.simulate.status``           status codes and the compiled bound check
+``rc3r.study``                     a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
+``rc3r.verify``                    checks of a robot against Pinocchio
+``rc3r.plotting``                  figures (never switches the matplotlib backend)
+``rc3r.io``                        atomic file output, TOML reading
+``rc3r.errors``                    exception types (one-line errors on the command line)
+``rc3r.cli``                       the command line: the only place that parses, prints, exits
+``rc3r.cli.model``                 ``verify-model``, ``make-urdf``
+``rc3r.cli.bounds``                ``bounds``
+``rc3r.cli.run``                   ``run``, ``paper``, ``sweep-eps``
+``rc3r.cli.bench``                 ``bench``
+=================================  ==============================================================
 
 Conventions (units, frames, gravity, parameter orders): ``docs/conventions.md``.
 """

@@ -121,9 +121,13 @@ def _jsonable(x):
     return x
 
 
+def _progress(msg: str) -> None:
+    print(f"[bench] {msg}", file=sys.stderr, flush=True)
+
+
 def cmd_bench(args) -> int:
     """``rc3r bench [--json] [--quick]``: print the tables (or one JSON object); 1 if a check fails."""
-    r = robot_class(DEFAULT_ROBOT).benchmark(quick=bool(getattr(args, "quick", False)))
+    r = robot_class(DEFAULT_ROBOT).benchmark(quick=bool(getattr(args, "quick", False)), progress=_progress)
     if getattr(args, "json", False):
         print(json.dumps(_jsonable(r), indent=2))
     else:

@@ -27,8 +27,13 @@ FBL, ROBUST, ROBUST_COEFF, ADAPTIVE, PD = 0, 1, 2, 3, 4
 
 _JIT = dict(cache=True, nogil=True)
 
+#: Inlined into the caller at numba IR level: a robot's compiled simulator calls these once or
+#: more per right-hand side, and a separate call with a dozen array arguments costs more than
+#: the law's arithmetic (measured: 1.47x on the 10 s robust run without inlining).
+_INLINE = dict(_JIT, inline="always")
 
-@njit(**_JIT)
+
+@njit(**_INLINE)
 def law_signals(code, cp, q, qd, ref, v, a, r, w):
     """Fill v, a (regressor arguments), r (sliding variable) and w (additive torque), each (n,)."""
     n = q.shape[0]
@@ -61,7 +66,7 @@ def law_signals(code, cp, q, qd, ref, v, a, r, w):
             w[i] = -cp[g + i] * r[i]
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def law_output(code, cp, Y, r, z, th_eff, zdot):
     """Effective parameters ``th_eff`` (p,) and controller-state rate ``zdot``; returns ||Y^T r||.
 
@@ -98,7 +103,7 @@ def law_output(code, cp, Y, r, z, th_eff, zdot):
     return nrm
 
 
-@njit(**_JIT)
+@njit(**_INLINE)
 def apply_regressor(Y, th_eff, w, u):
     """u = w + Y th_eff, shape (n,)."""
     n, p = Y.shape

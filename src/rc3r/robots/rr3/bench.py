@@ -119,8 +119,12 @@ def _forward_dynamics_in_loop(th, Q, QD, U, l2, g0, out):
 # ---- small utilities --------------------------------------------------------------------
 
 
+#: Where progress messages go; :func:`run_bench` sets it (the command line prints them).
+_REPORT = [lambda msg: None]
+
+
 def _progress(msg: str) -> None:
-    print(f"[bench] {msg}", file=sys.stderr, flush=True)
+    _REPORT[0](msg)
 
 
 def _time(fn, repeats: int) -> tuple[float, float]:
@@ -499,8 +503,9 @@ def _targets(ops: dict, sims: dict, duration: float) -> dict:
 # ---- the whole benchmark ----------------------------------------------------------------
 
 
-def run_bench(quick: bool = False) -> dict:
+def run_bench(quick: bool = False, progress=None) -> dict:
     """Run everything; return the JSON-ready result (see the module docstring)."""
+    _REPORT[0] = progress or (lambda msg: None)
     t_start = time.perf_counter()
     n, repeats = (1000, 1) if quick else (100_000, 7)
     duration, sim_repeats = (0.5, 1) if quick else (10.0, 3)

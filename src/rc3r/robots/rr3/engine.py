@@ -33,7 +33,7 @@ from . import kernels as K
 _JIT = dict(cache=True, nogil=True)
 
 
-@njit(**_JIT)
+@njit(**dict(_JIT, inline="always"))
 def control(law, cp, q, qd, z, ref, l2, g0, u, zdot, Y, th_eff, v, a, r, w):
     """u (3,) and zdot of a registered law (code ``law``) on the 3R regressor; returns ||Y^T r||."""
     law_signals(law, cp, q, qd, ref, v, a, r, w)

@@ -96,11 +96,14 @@ class RR3(Robot):
         return paper
 
     @classmethod
-    def benchmark(cls, quick: bool = False) -> dict:
-        """``rc3r bench``: the closed form against Pinocchio, simulation timings (:mod:`.bench`)."""
+    def benchmark(cls, quick: bool = False, progress=None) -> dict:
+        """``rc3r bench``: the closed form against Pinocchio, simulation timings (:mod:`.bench`).
+
+        ``progress(msg)`` receives progress messages (the command line prints them).
+        """
         from .bench import run_bench
 
-        return run_bench(quick=quick)
+        return run_bench(quick=quick, progress=progress)
 
     @classmethod
     def default_box(cls):
