@@ -40,13 +40,15 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.study``                     a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
 ``rc3r.verify``                    checks of a robot against Pinocchio
 ``rc3r.plotting``                  figures (never switches the matplotlib backend)
-``rc3r.io``                        atomic file output, TOML reading
+``rc3r.io``                        atomic file output (user's umask), TOML reading
+``rc3r.provenance``                versions, git commit, command line of an output
 ``rc3r.errors``                    exception types (one-line errors on the command line)
 ``rc3r.cli``                       the command line: the only place that parses, prints, exits
 ``rc3r.cli.model``                 ``verify-model``, ``make-urdf``
 ``rc3r.cli.bounds``                ``bounds``
 ``rc3r.cli.run``                   ``run``, ``paper``, ``sweep-eps``
 ``rc3r.cli.bench``                 ``bench``
+``rc3r.cli._output``               output directories written as a whole, locked
 =================================  ==============================================================
 
 Conventions (units, frames, gravity, parameter orders): ``docs/conventions.md``.

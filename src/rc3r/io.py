@@ -9,13 +9,32 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-import tomllib
 from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import ConfigError
 
-__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml"]
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the same parser, as the package tomli
+    import tomli as tomllib
+
+__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml", "tomllib", "apply_umask"]
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def apply_umask(path: str | Path, directory: bool = False) -> None:
+    """Give ``path`` the mode a plain ``open``/``mkdir`` would: 0666 (0777 for a directory) & ~umask.
+
+    ``tempfile`` creates files 0600 and directories 0700; a result renamed into place must not
+    keep those (a regenerated ``urdf/rr3.urdf`` would lose its 0644).
+    """
+    os.chmod(path, (0o777 if directory else 0o666) & ~_umask())
 
 
 @contextmanager
@@ -27,6 +46,7 @@ def atomic_path(path: str | Path, suffix: str = ""):
     os.close(fd)
     try:
         yield Path(tmp)
+        apply_umask(tmp)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -72,8 +72,6 @@ def _plant(cls, nominal, box, spec: str, seed: int):
     if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
         plant = cls.from_urdf(spec)
     else:
-        if spec == "random":
-            spec = f"random:{seed}"
         # random draws are redrawn (same seeded stream) until the robot is physical
         plant = perturb(nominal, box, spec, simulable=spec.startswith("random"))
     plant.require_simulable()
@@ -181,6 +179,13 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     spec = plant or plant_cfg.get("spec", "nominal")
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])
+    if spec == "random":
+        spec = f"random:{seed}"
+    if isinstance(spec, str) and spec.startswith("random:"):
+        try:
+            seed = int(spec.partition(":")[2])  # the seed that actually drew the plant is recorded
+        except ValueError:
+            pass  # perturb() refuses the spec with its own message
     the_plant = _plant(cls, nominal, the_box, spec, seed)
     model = _model(LAWS[kind], the_plant, _Bounds(nominal, the_box), perturbed, dict(cfg.get("model", {})))
     law = _law(kind, model, ctrl_cfg, eps)

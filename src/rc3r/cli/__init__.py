@@ -135,7 +135,7 @@ def main(argv=None) -> int:
         print(f"rc3r: error: {exc}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
-        print("rc3r: interrupted (files already written are complete)", file=sys.stderr)
+        print("rc3r: interrupted; the output directory was left as it was before this run", file=sys.stderr)
         return EXIT["interrupted"]
     except Exception as exc:  # a bug: still one line, with a way to get the traceback
         if os.environ.get("RC3R_DEBUG"):

@@ -14,8 +14,10 @@ from ..errors import DivergenceError
 from ..io import atomic_path, atomic_write_json, atomic_write_text, read_toml
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate.metrics import CHATTERING_DEFINITION
+from ..provenance import provenance
 from ..study import build_run, execute
 from . import EXIT
+from ._output import output_dir
 
 
 def _columns(n: int) -> list[str]:
@@ -60,9 +62,11 @@ def cmd_run(args) -> int:
     _progress(f"rc3r run: {spec.name} on plant '{spec.plant.label}', {spec.options.mode}"
               f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
               f"{spec.options.duration:g} s, engine {spec.options.engine} ...")
-    res, m = execute(spec)
     out = Path(args.out)
-    _write_run(res, m, out, spec.name)
+    with output_dir(out) as tmp:  # --out checked and locked before simulating
+        res, m = execute(spec)
+        m["provenance"] = provenance(config=cfg, seed=spec.seed)
+        _write_run(res, m, tmp, spec.name)
     print(f"{spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, final bound = {_fmt3(m['final_error_bound'])} rad, "
           f"chattering = {_fmt3(m['chattering'])} N m/s, wall {m['wall_time_s']:.2f} s -> {out}/")
     try:
@@ -86,11 +90,14 @@ def _table(rows: list[dict]) -> str:
 
 def cmd_paper(args) -> int:
     """``rc3r paper``: the five scenarios, continuous and sampled; figures, summary.md/json."""
+    paper = robot_class(DEFAULT_ROBOT).paper_study()
+    with output_dir(args.out) as tmp:
+        return _paper(paper, tmp)
+
+
+def _paper(paper, out: Path) -> int:
     from ..plotting import plot_error_comparison
 
-    paper = robot_class(DEFAULT_ROBOT).paper_study()
-
-    out = Path(args.out)
     t_start = time.perf_counter()
     rows, results = [], {}
     for mode, rate in (("continuous", None), ("sampled", paper.PAPER_SAMPLED_RATE)):
@@ -109,7 +116,8 @@ def cmd_paper(args) -> int:
     claims = paper.claims(rows)
     total = time.perf_counter() - t_start
     summary = {"scenarios": rows, "claims": claims, "sampled_rate_hz": paper.PAPER_SAMPLED_RATE,
-               "chattering_definition": CHATTERING_DEFINITION, "total_wall_s": total}
+               "chattering_definition": CHATTERING_DEFINITION, "total_wall_s": total,
+               "provenance": provenance()}
     atomic_write_json(out / "summary.json", summary)
     md = ["# rc3r paper: section 4 reproduced", "",
           paper.SUMMARY_INTRO, "",
@@ -123,12 +131,17 @@ def cmd_paper(args) -> int:
 
 def cmd_sweep_eps(args) -> int:
     """``rc3r sweep-eps``: robust-perturbed over eps, continuous and sampled; trade-off plot."""
+    paper = robot_class(DEFAULT_ROBOT).paper_study()
+    eps_values = args.eps or list(np.round(np.logspace(-2, 0.5, 8), 4))
+    with output_dir(args.out) as tmp:
+        _sweep(paper, eps_values, args.duration, tmp)
+    print(f"wrote {args.out}/sweep.json and {args.out}/tradeoff.png")
+    return EXIT["ok"]
+
+
+def _sweep(paper, eps_values, duration, out: Path) -> None:
     from ..plotting import plot_tradeoff
 
-    paper = robot_class(DEFAULT_ROBOT).paper_study()
-
-    eps_values = args.eps or list(np.round(np.logspace(-2, 0.5, 8), 4))
-    out = Path(args.out)
     rows = []
     n = 2 * len(eps_values)
     k = 0
@@ -136,7 +149,7 @@ def cmd_sweep_eps(args) -> int:
         for e in eps_values:
             k += 1
             spec = build_run(controller="robust", perturbed=True, eps=float(e), rate=rate,
-                             duration=args.duration, name=f"robust-perturbed-eps{e:g}",
+                             duration=duration, name=f"robust-perturbed-eps{e:g}",
                              config={"controller": dict(paper.PAPER_GAINS["robust"])})
             res, m = execute(spec)
             m["eps"] = float(e)
@@ -144,7 +157,6 @@ def cmd_sweep_eps(args) -> int:
             rows.append(m)
             _progress(f"[{k}/{n}] {m['mode_label']} eps = {e:g}: {res.message}, final bound "
                       f"{max(m['final_error_bound']):.3g} rad, chattering {sum(m['chattering']):.4g} N m/s")
-    atomic_write_json(out / "sweep.json", {"runs": rows, "chattering_definition": CHATTERING_DEFINITION})
+    atomic_write_json(out / "sweep.json", {"runs": rows, "chattering_definition": CHATTERING_DEFINITION,
+                                           "provenance": provenance()})
     plot_tradeoff(rows, out / "tradeoff.png", "robust law, perturbed: eps trade-off")
-    print(f"wrote {out}/sweep.json and {out}/tradeoff.png")
-    return EXIT["ok"]

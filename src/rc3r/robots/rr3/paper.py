@@ -11,9 +11,9 @@ Scenario reading that reproduces the paper (docs/control.md):
 from __future__ import annotations
 
 import math
-import tomllib
 from importlib import resources
 
+from ...io import tomllib
 from ...trajectory import Sines
 from ...uncertainty.box import Box, parse_box
 

@@ -29,7 +29,6 @@ Table 1 gives exactly Table 2 (``tests/test_params.py``).
 """
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
@@ -37,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import ConfigError, ParameterError
-from ...io import read_toml
+from ...io import read_toml, tomllib
 
 __all__ = [
     "G0",
