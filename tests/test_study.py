@@ -130,4 +130,34 @@ def test_unknown_gain_in_config_is_refused(tmp_path, capsys):
     cfg.write_text('[controller]\nkind = "pd"\nKpp = 5\n')
     assert main(["run", "--config", str(cfg), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "no gain Kpp" in err and "Traceback" not in err
+    assert "unknown key 'Kpp' in [controller]; did you mean 'Kp'?" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("text, needle", [
+    ("simulaton = {}", "did you mean 'simulation'?"),
+    ("[simulation]\nduraton = 1", "did you mean 'duration'?"),
+    ("[simulation]\nduration = \"abc\"", "duration must be a number"),
+    ("[simulation]\nduration = 1e9", "would store"),
+    ("[simulation]\nrate = 1e12", "controller samples"),
+    ("[simulation]\nrate = 0.01\nduration = 1", "slower than the duration"),
+    ("[simulation]\nnsub = true", "nsub must be an integer"),
+    ("seed = 1e400", "seed must be an integer"),
+    ("seed = -1", "seed must be an integer"),
+    ("perturbed = \"yes\"", "perturbed must be true or false"),
+    ("[controller]\nkind = 5", "kind must be one of"),
+    ("[controller]\nkind = \"robust\"\nLamda = 3", "did you mean 'Lambda'?"),
+    ("[plant]\nspec = 3", "spec must be a string"),
+    ("[model]\nrho = \"big\"", "rho must be"),
+    ("controller = 5", "must be a table"),
+])
+def test_bad_config_values_refused_in_one_line(tmp_path, capsys, text, needle):
+    """Typos, wrong types and sizes that cannot be simulated: one line naming the problem, exit 2,
+    before anything is simulated or written."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(text + "\n")
+    out = tmp_path / "o"
+    assert main(["run", "--config", str(cfg), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.startswith("rc3r: error: ")]
+    assert len(lines) == 1 and needle in lines[0] and "Traceback" not in err, err
+    assert not out.exists()

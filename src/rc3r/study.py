@@ -33,7 +33,7 @@ from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
 from .uncertainty import certified_bounds, certified_radius, load_box, paper_bounds, perturb
 
-__all__ = ["RunSpec", "build_run", "execute", "resolve_box"]
+__all__ = ["RunSpec", "build_run", "execute", "resolve_box", "CONFIG_KEYS"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +52,59 @@ class RunSpec:
     seed: int
     scenario: str
     model: dict = field(default_factory=dict)
+
+
+#: Keys a run configuration may hold, per table (docs/control.md).
+CONFIG_KEYS = {
+    "": ("robot", "seed", "perturbed", "box", "plant", "model", "controller", "trajectory", "simulation"),
+    "plant": ("spec", "urdf", "box"),
+    "model": ("theta", "rho"),
+    "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
+    "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "engine", "q_max", "qd_max", "u_max"),
+}
+
+
+def _check_keys(table, allowed, where: str) -> dict:
+    """Refuse a non-table or an unknown key, naming the nearest valid one."""
+    import difflib
+
+    if not isinstance(table, dict):
+        raise ConfigError(f"config: {where or 'the file'} must be a table, got {table!r}")
+    for key in table:
+        if key not in allowed:
+            near = difflib.get_close_matches(str(key), allowed, n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else f" (valid: {', '.join(allowed)})"
+            raise ConfigError(f"config: unknown key {key!r}{' in [' + where + ']' if where else ''}{hint}")
+    return table
+
+
+def _check_config(cfg: dict, kind_override=None) -> None:
+    _check_keys(cfg, CONFIG_KEYS[""], "")
+    for table in ("plant", "model", "trajectory", "simulation"):
+        if table in cfg:
+            _check_keys(cfg[table], CONFIG_KEYS[table], table)
+    if "controller" in cfg:
+        ctrl = _check_keys(cfg["controller"], tuple(cfg["controller"]) if isinstance(cfg["controller"], dict)
+                           else (), "controller")
+        kind = ctrl.get("kind", "robust")
+        if not isinstance(kind, str) or kind not in LAWS:
+            raise ConfigError(f"config: [controller] kind must be one of {', '.join(LAWS)}, got {kind!r}")
+        kind = kind_override or kind
+        if kind not in LAWS:
+            raise ConfigError(f"config: [controller] kind must be one of {', '.join(LAWS)}, got {kind!r}")
+        names = [f for f in LAWS[kind].__dataclass_fields__ if f not in ("theta", "rho", "rho_i")]
+        if "eps_i" in names:
+            names.append("eps")
+        _check_keys(ctrl, ["kind"] + names, "controller")
+    seed = cfg.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise ConfigError(f"config: seed must be an integer in [0, 2^63), got {seed!r}")
+    if not isinstance(cfg.get("perturbed", False), bool):
+        raise ConfigError(f"config: perturbed must be true or false, got {cfg['perturbed']!r}")
+    for key, where in (("robot", cfg), ("box", cfg), ("spec", cfg.get("plant", {})), ("urdf", cfg.get("plant", {})),
+                       ("box", cfg.get("plant", {}))):
+        if key in where and not isinstance(where[key], str):
+            raise ConfigError(f"config: {key} must be a string, got {where[key]!r}")
 
 
 def _floats(x):
@@ -166,6 +219,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     (``kind`` and gains), ``[trajectory]``, ``[simulation]`` (docs/control.md).
     """
     cfg = config or {}
+    _check_config(cfg, controller)
     seed = int(cfg.get("seed", 0))
     cls = robot_class(robot or cfg.get("robot", DEFAULT_ROBOT))
     ctrl_cfg = dict(cfg.get("controller", {}))

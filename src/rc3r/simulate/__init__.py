@@ -50,6 +50,19 @@ __all__ = ["SimOptions", "SimResult", "simulate", "ENGINES"]
 #: Engines accepted by :class:`SimOptions`.
 ENGINES = ("auto", "fast", "python", "reference")
 
+#: Largest stored time series (rows): each row holds ~(3 n + nz + 2) doubles, so 5e6 rows of the
+#: 3R are ~0.6 GB. A longer run must lower ``output_rate``.
+MAX_ROWS = 5_000_000
+
+#: Most controller samples of a sampled run (1e9 samples take hours even compiled).
+MAX_SAMPLES = 1_000_000_000
+
+
+def _real(name, x) -> float:
+    if isinstance(x, bool) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name} must be a number, got {x!r}")
+    return float(x)
+
 
 @dataclass(frozen=True)
 class SimOptions:
@@ -87,15 +100,28 @@ class SimOptions:
 
     def __post_init__(self):
         for name in ("duration", "output_rate", "rtol", "atol", "q_max", "qd_max", "u_max"):
-            x = float(getattr(self, name))
+            x = _real(name, getattr(self, name))
             if not (np.isfinite(x) and x > 0):
                 raise ParameterError(f"{name} must be finite and > 0, got {getattr(self, name)}")
-        if self.rate is not None and not (np.isfinite(self.rate) and self.rate > 0):
-            raise ParameterError(f"rate must be finite and > 0, got {self.rate}")
-        if self.nsub is not None and int(self.nsub) < 1:
-            raise ParameterError(f"nsub must be >= 1, got {self.nsub}")
-        if self.engine not in ENGINES:
+        if self.rate is not None:
+            r = _real("rate", self.rate)
+            if not (np.isfinite(r) and r > 0):
+                raise ParameterError(f"rate must be finite and > 0, got {self.rate}")
+            if self.duration * r > MAX_SAMPLES:
+                raise ParameterError(f"duration {self.duration:g} s at rate {r:g} Hz is {self.duration * r:.3g} "
+                                     f"controller samples (at most {MAX_SAMPLES:.0e})")
+            if 1.0 / r > self.duration:
+                raise ParameterError(f"rate {r:g} Hz is slower than the duration {self.duration:g} s: "
+                                     "not one control period would be simulated")
+        if self.nsub is not None and (isinstance(self.nsub, bool) or not isinstance(self.nsub, (int, np.integer))
+                                      or self.nsub < 1):
+            raise ParameterError(f"nsub must be an integer >= 1, got {self.nsub!r}")
+        if not isinstance(self.engine, str) or self.engine not in ENGINES:
             raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
+        rows = self.duration * (self.output_rate if self.rate is None else min(self.rate, self.output_rate))
+        if rows > MAX_ROWS:
+            raise ParameterError(f"duration {self.duration:g} s would store {rows:.3g} rows (at most {MAX_ROWS:.0e}): "
+                                 "lower output_rate or the duration")
 
     @property
     def substeps(self) -> int:
