@@ -37,6 +37,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate._python``          the ``python`` and ``reference`` engines (any robot, any law)
 ``rc3r.simulate.metrics``          scalar metrics of a run
 ``rc3r.simulate.status``           status codes and the compiled bound check
+``rc3r.simulate.export``           a result as a table, CSV, figure, run directory
 ``rc3r.study``                     a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
 ``rc3r.verify``                    checks of a robot against Pinocchio
 ``rc3r.plotting``                  figures (never switches the matplotlib backend)

@@ -13,10 +13,15 @@ from matplotlib.figure import Figure
 
 from .io import atomic_savefig
 
-__all__ = ["plot_run", "plot_error_comparison", "plot_tradeoff"]
+__all__ = ["run_figure", "plot_run", "plot_error_comparison", "plot_tradeoff"]
 
 
 def plot_run(res, path: str | Path, title: str) -> Path:
+    """:func:`run_figure` saved as PNG (atomically)."""
+    return atomic_savefig(run_figure(res, title), path, dpi=110)
+
+
+def run_figure(res, title: str) -> Figure:
     """Joint errors (left) and torques (right), one row per joint, as the paper's figures 3-7."""
     n = res.q.shape[1]
     fig = Figure(figsize=(11, 1.2 + 1.95 * n), constrained_layout=True)
@@ -35,7 +40,7 @@ def plot_run(res, path: str | Path, title: str) -> Path:
     axes[0, 1].set_title("joint torque u")
     status = "" if res.ok else f"  [{res.message}]"
     fig.suptitle(f"{title} ({res.mode}{'' if res.options.rate is None else f' {res.options.rate:g} Hz'}){status}")
-    return atomic_savefig(fig, path, dpi=110)
+    return fig
 
 
 def _finish(fig, ax, path, title, xlabel, ylabel) -> Path:

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import DivergenceError
-from ..io import atomic_path, atomic_write_json, atomic_write_text, read_toml
+from ..io import atomic_write_json, atomic_write_text, read_toml
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
@@ -20,30 +20,12 @@ from . import EXIT
 from ._output import output_dir
 
 
-def _columns(n: int) -> list[str]:
-    return (["t"] + [f"{k}{j}" for k in ("q", "qd", "qdes", "e", "u") for j in range(1, n + 1)]
-            + ["ytr_norm"])
-
-
-def write_timeseries(res, path) -> Path:
-    """CSV with columns t [s], q [rad], qd [rad/s], q_des [rad], e = q - q_des [rad],
-    u [N m], ytr_norm = ||Y^T r|| (robust laws; 0 otherwise)."""
-    data = np.column_stack([res.t, res.q, res.qd, res.q_des, res.e, res.u, res.yt_r_norm])
-    with atomic_path(path) as tmp:
-        np.savetxt(tmp, data, delimiter=",", header=",".join(_columns(res.n)), comments="", fmt="%.10g")
-    return Path(path)
-
-
 def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
 def _write_run(res, m: dict, out: Path, title: str) -> None:
-    from ..plotting import plot_run
-
-    write_timeseries(res, out / "timeseries.csv")
-    plot_run(res, out / "run.png", title)
-    atomic_write_json(out / "metrics.json", m)
+    res.save(out, m, title)
 
 
 def _fmt3(x) -> str:

@@ -1,0 +1,65 @@
+"""rc3r.simulate.SimResult as a table, a figure and a run directory; the docstring examples run."""
+from __future__ import annotations
+
+import doctest
+import json
+
+import numpy as np
+import pytest
+
+import rc3r
+from rc3r.simulate.export import columns
+
+
+@pytest.fixture(scope="module")
+def res():
+    spec = rc3r.build_run(controller="robust", perturbed=True, duration=0.3)
+    return rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+
+
+def test_to_pandas_has_the_documented_columns_and_values(res):
+    df = res.to_pandas()
+    assert list(df.columns) == columns(3)[1:] and df.index.name == "t"
+    np.testing.assert_array_equal(df.index.to_numpy(), res.t)
+    np.testing.assert_array_equal(df["e2"].to_numpy(), res.q[:, 1] - res.q_des[:, 1])
+    np.testing.assert_array_equal(df["u3"].to_numpy(), res.u[:, 2])
+
+
+def test_to_pandas_without_pandas_says_so(res, monkeypatch):
+    import builtins
+
+    real = builtins.__import__
+
+    def no_pandas(name, *a, **k):
+        if name == "pandas":
+            raise ImportError("no pandas")
+        return real(name, *a, **k)
+
+    monkeypatch.setattr(builtins, "__import__", no_pandas)
+    with pytest.raises(rc3r.ConfigError, match="needs pandas"):
+        res.to_pandas()
+
+
+def test_plot_returns_a_figure_and_leaves_the_backend_alone(res):
+    import matplotlib
+
+    before = matplotlib.get_backend()
+    fig = res.plot()
+    assert len(fig.axes) == 6 and matplotlib.get_backend() == before
+
+
+def test_save_writes_what_rc3r_run_writes(res, tmp_path):
+    d = res.save(tmp_path / "r")
+    assert sorted(p.name for p in d.iterdir()) == ["metrics.json", "run.png", "timeseries.csv"]
+    m = json.loads((d / "metrics.json").read_text())
+    assert m["max_abs_error"] == pytest.approx(np.abs(res.e).max(axis=0).tolist(), rel=1e-15)
+    head = (d / "timeseries.csv").read_text().splitlines()[0].split(",")
+    assert head == columns(3)
+
+
+def test_docstring_examples_run():
+    import sys
+
+    module = sys.modules["rc3r.simulate"]  # rc3r.simulate is the function; the module is in sys.modules
+    failed, attempted = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert attempted >= 3 and failed == 0
