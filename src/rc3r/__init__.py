@@ -25,12 +25,16 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.rr3.engine``         the compiled closed-loop simulator
 ``rc3r.robots.rr3.paper``          the paper's box, gains, trajectory, scenarios, claims
 ``rc3r.robots.rr3.bench``          closed form vs Pinocchio, simulation timings
+``rc3r.robots.pinocchio``          :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
+``rc3r.robots.base_parameters``    numerical base parameters of a Pinocchio model
+``rc3r.robots.pinocchio_kernel``   compiled Slotine--Li regressor of a serial chain
 ``rc3r.controllers``               control laws u = Y theta_eff + w and their registry
 ``rc3r.controllers._kernels``      compiled kernels of the built-in laws (generic over n, p)
 ``rc3r.trajectory``                desired trajectories (sines, quintic), compiled evaluation
 ``rc3r.uncertainty``               parameter uncertainty (re-exports the three below)
 ``rc3r.uncertainty.box``           boxes on standard parameters, box files, perturbed plants
 ``rc3r.uncertainty.bounds``        theta_0 and rho: the paper's method, certified exact ranges
+``rc3r.uncertainty.payload``       exact bounds for an unknown payload on the last link
 ``rc3r.uncertainty.sampled``       sampled lower bound on max ||theta - theta_0||
 ``rc3r.simulate``                  :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
 ``rc3r.simulate._fast``            the ``fast`` engine (a robot's compiled simulator)
