@@ -27,7 +27,7 @@ import numpy as np
 
 from .controllers import LAWS, make_law
 from .errors import ConfigError, ParameterError
-from .robots import DEFAULT_ROBOT, robot_class
+from .robots import DEFAULT_ROBOT, load_robot
 from .simulate import SimOptions, SimResult, simulate
 from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
@@ -56,7 +56,8 @@ class RunSpec:
 
 #: Keys a run configuration may hold, per table (docs/control.md).
 CONFIG_KEYS = {
-    "": ("robot", "seed", "perturbed", "box", "plant", "model", "controller", "trajectory", "simulation"),
+    "": ("robot", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "trajectory", "simulation"),
+    "payload": ("mass", "com"),
     "plant": ("spec", "urdf", "box"),
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
@@ -80,7 +81,7 @@ def _check_keys(table, allowed, where: str) -> dict:
 
 def _check_config(cfg: dict, kind_override=None) -> None:
     _check_keys(cfg, CONFIG_KEYS[""], "")
-    for table in ("plant", "model", "trajectory", "simulation"):
+    for table in ("plant", "model", "trajectory", "simulation", "payload"):
         if table in cfg:
             _check_keys(cfg[table], CONFIG_KEYS[table], table)
     if "controller" in cfg:
@@ -107,54 +108,127 @@ def _check_config(cfg: dict, kind_override=None) -> None:
             raise ConfigError(f"config: {key} must be a string, got {where[key]!r}")
 
 
+def _payload(mass, com):
+    """``((lo, hi), com)`` from a mass interval [kg] and a CoM (3,) [m], or None; validated."""
+    if mass is None:
+        if com is not None:
+            raise ConfigError("a payload CoM was given without a payload mass interval")
+        return None
+    try:
+        lo, hi = (float(x) for x in mass)
+        c = np.zeros(3) if com is None else np.asarray(com, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"payload mass must be [lo, hi] kg and com 3 numbers, got {mass!r}, {com!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo <= hi) or c.shape != (3,) or not np.all(np.isfinite(c)):
+        raise ConfigError(f"payload mass must satisfy 0 <= lo <= hi (finite) and com be 3 finite numbers, "
+                          f"got {mass!r}, {com!r}")
+    return (lo, hi), c
+
+
 def _floats(x):
     return None if x is None else [float(v) for v in np.asarray(x, dtype=float).ravel()]
 
 
-def resolve_box(cls, nominal, box_path=None):
+def resolve_box(nominal, box_path=None):
     """The box of a run: ``box_path`` (TOML) if given, else the robot's default box."""
     if box_path is not None:
         return load_box(box_path, nominal.standard_parameter_names)
-    box = cls.default_box()
+    box = nominal.default_box()
     if box is None:
-        raise ConfigError(f"robot {cls.name!r} has no default box: give one (--box FILE)")
+        raise ConfigError(f"robot {getattr(nominal, 'robot_name', nominal.name)!r} has no default box: "
+                          "give --box FILE or --payload LO:HI")
     return box
 
 
-def _plant(cls, nominal, box, spec: str, seed: int):
-    if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
-        plant = cls.from_urdf(spec)
-    else:
-        # random draws are redrawn (same seeded stream) until the robot is physical
-        plant = perturb(nominal, box, spec, simulable=spec.startswith("random"))
-    plant.require_simulable()
-    return plant
-
-
 class _Bounds:
-    """The bounds of one nominal robot and box, each computed at most once."""
+    """The uncertainty of one run (a box, or a payload) and its bounds, each computed at most once."""
 
-    def __init__(self, nominal, box):
-        self.nominal, self.box = nominal, box
-        self._paper = self._cert = None
+    def __init__(self, nominal, box_path=None, payload=None):
+        self.nominal, self.box_path, self.payload = nominal, box_path, payload
+        self._box = self._paper = self._cert = self._pay = None
+
+    @property
+    def box(self):
+        if self._box is None:
+            self._box = resolve_box(self.nominal, self.box_path)
+        return self._box
 
     @property
     def paper(self):
+        if self.payload is not None:
+            return self.pay
         if self._paper is None:
             self._paper = paper_bounds(self.nominal, self.box)
         return self._paper
 
     @property
     def cert(self):
+        if self.payload is not None:
+            return self.pay
         if self._cert is None:
             self._cert = certified_bounds(self.nominal, self.box)
         return self._cert
 
+    @property
+    def pay(self):
+        if self._pay is None:
+            from .uncertainty.payload import payload_bounds
+
+            mass, com = self.payload
+            self._pay = payload_bounds(self.nominal, mass, com)
+        return self._pay
+
+    def source(self) -> str:
+        if self.payload is not None:
+            (lo, hi), com = self.payload
+            return f"payload of {lo:g}..{hi:g} kg at {tuple(float(c) for c in com)} m in the last joint frame"
+        return self.box.source
+
+
+def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
+    if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
+        plant = type(nominal).from_urdf(spec)
+    elif bounds.payload is not None:
+        plant = _payload_plant(nominal, bounds.payload, spec)
+    elif spec == "nominal":
+        plant = nominal
+    else:
+        # random draws are redrawn (same seeded stream) until the robot is physical
+        plant = perturb(nominal, bounds.box, spec, simulable=spec.startswith("random"))
+    plant.require_simulable()
+    return plant
+
+
+def _payload_plant(nominal, payload, spec: str):
+    """The plant carrying a payload: ``upper`` (default, also for ``nominal``) the heaviest,
+    ``lower`` the lightest, ``random:<seed>`` a seeded uniform mass, ``mass:<kg>`` a given one."""
+    from .uncertainty.payload import with_payload
+
+    (lo, hi), com = payload
+    kind, _, arg = spec.partition(":")
+    if kind in ("nominal", "upper") and not arg:
+        m = hi
+    elif kind == "lower" and not arg:
+        m = lo
+    elif kind == "random" and arg.isdigit():
+        m = float(np.random.default_rng(int(arg)).uniform(lo, hi))
+    elif kind == "mass":
+        try:
+            m = float(arg)
+        except ValueError:
+            m = float("nan")
+        if not lo <= m <= hi:
+            raise ConfigError(f"plant {spec!r}: the payload mass must be a number in [{lo:g}, {hi:g}] kg")
+    else:
+        raise ConfigError(f"bad plant {spec!r} with a payload: expected upper, lower, random:<seed>, mass:<kg>")
+    return with_payload(nominal, m, com, label=f"{nominal.label} + payload {m:g} kg")
+
 
 def _model(law_cls, plant, bounds: _Bounds, perturbed: bool, cfg: dict) -> dict:
-    """The controller's model and where it came from."""
+    """The controller's model and where it came from (bounds only when the law needs them)."""
     which = cfg.get("theta", "paper" if perturbed else "plant")
     p = plant.p
+    pay = bounds.payload is not None
     if isinstance(which, list):
         th = np.asarray(which, dtype=float)
         if th.shape != (p,) or not np.all(np.isfinite(th)):
@@ -162,32 +236,40 @@ def _model(law_cls, plant, bounds: _Bounds, perturbed: bool, cfg: dict) -> dict:
         src = "theta from config"
     elif which == "plant":
         th, src = plant.theta, "theta of the plant (ideal)"
+    elif pay and which in ("paper", "certified", "payload"):
+        th, src = bounds.pay.theta0, "theta_0 = centre of the exact payload segment"
     elif which == "paper":
         th, src = bounds.paper.theta0, "theta_0 by the paper's method (a): (theta(nominal) + theta(p_up)) / 2"
     elif which == "certified":
         th, src = bounds.cert.theta0, "theta_0 = centre of the exact ranges over the box"
     else:
         raise ConfigError(f"model theta must be 'plant', 'paper', 'certified' or {p} numbers, got {which!r}")
-    rho_cfg = cfg.get("rho", "paper")
-    rho_i = None
-    if "rho_i" in getattr(law_cls, "model_inputs", ()):
+    inputs = getattr(law_cls, "model_inputs", ())
+    rho = rho_i = rho_src = None
+    if "rho_i" in inputs:
         _, rho_i = certified_radius(bounds.cert, th)
-    if rho_cfg == "paper":
-        rho, rho_src = bounds.paper.rho, "paper's method (a): ||theta_0(a) - theta(nominal)||"
-    elif rho_cfg == "certified":
-        rho, _ = certified_radius(bounds.cert, th)
-        rho_src = "certified: sqrt(sum rho_i^2) of the exact ranges around theta_0"
-    else:
-        try:
-            rho = float(rho_cfg)
-        except (TypeError, ValueError):
-            raise ConfigError(f"rho must be 'paper', 'certified' or a number, got {rho_cfg!r}") from None
-        rho_src = "rho from config"
+    if "rho" in inputs:
+        rho_cfg = cfg.get("rho", "paper")
+        if pay and rho_cfg in ("paper", "certified", "payload"):
+            rho, _ = certified_radius(bounds.pay, th)
+            rho_src = "payload: exact, sqrt(sum rho_i^2) over the payload segment around theta_0"
+        elif rho_cfg == "paper":
+            rho, rho_src = bounds.paper.rho, "paper's method (a): ||theta_0(a) - theta(nominal)||"
+        elif rho_cfg == "certified":
+            rho, _ = certified_radius(bounds.cert, th)
+            rho_src = "certified: sqrt(sum rho_i^2) of the exact ranges around theta_0"
+        else:
+            try:
+                rho = float(rho_cfg)
+            except (TypeError, ValueError):
+                raise ConfigError(f"rho must be 'paper', 'certified' or a number, got {rho_cfg!r}") from None
+            rho_src = "rho from config"
+    needs_bounds = which in ("paper", "certified", "payload") or rho is not None or rho_i is not None
     return {
-        "theta0": _floats(th), "rho": float(rho), "rho_i": _floats(rho_i),
+        "theta0": _floats(th), "rho": None if rho is None else float(rho), "rho_i": _floats(rho_i),
         "theta_source": src, "rho_source": rho_src,
         "rho_i_source": "certified per-coefficient radius around theta_0" if rho_i is not None else None,
-        "box": bounds.box.source, "nominal": bounds.nominal.label,
+        "box": bounds.source() if needs_bounds else None, "nominal": bounds.nominal.label,
     }
 
 
@@ -209,7 +291,7 @@ def _law(kind: str, model: dict, cfg: dict, eps_override):
 def build_run(*, robot: str | None = None, controller: str | None = None, perturbed: bool = False,
               plant: str | None = None, eps: float | None = None, rate: float | None = None,
               duration: float | None = None, engine: str | None = None, box: str | None = None,
-              config: dict | None = None, name: str | None = None) -> RunSpec:
+              payload=None, payload_com=None, config: dict | None = None, name: str | None = None) -> RunSpec:
     """Resolve a run from keyword options (command line) over a config dict (TOML).
 
     Keyword options win over the config; both over the defaults (the robot's
@@ -221,15 +303,17 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     cfg = config or {}
     _check_config(cfg, controller)
     seed = int(cfg.get("seed", 0))
-    cls = robot_class(robot or cfg.get("robot", DEFAULT_ROBOT))
+    nominal = load_robot(robot or cfg.get("robot", DEFAULT_ROBOT))
     ctrl_cfg = dict(cfg.get("controller", {}))
     kind = controller or ctrl_cfg.get("kind", "robust")
     if kind not in LAWS:
         raise ConfigError(f"unknown controller {kind!r} ({', '.join(LAWS)})")
     perturbed = perturbed or bool(cfg.get("perturbed", False))
     plant_cfg = dict(cfg.get("plant", {}))
-    nominal = cls.nominal()
-    the_box = resolve_box(cls, nominal, box or cfg.get("box") or plant_cfg.get("box"))
+    pay_cfg = dict(cfg.get("payload", {}))
+    payload = _payload(payload if payload is not None else pay_cfg.get("mass"),
+                       payload_com if payload_com is not None else pay_cfg.get("com"))
+    bounds = _Bounds(nominal, box or cfg.get("box") or plant_cfg.get("box"), payload)
     spec = plant or plant_cfg.get("spec", "nominal")
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])
@@ -240,12 +324,12 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
             seed = int(spec.partition(":")[2])  # the seed that actually drew the plant is recorded
         except ValueError:
             pass  # perturb() refuses the spec with its own message
-    the_plant = _plant(cls, nominal, the_box, spec, seed)
-    model = _model(LAWS[kind], the_plant, _Bounds(nominal, the_box), perturbed, dict(cfg.get("model", {})))
+    the_plant = _plant(nominal, bounds, spec, seed)
+    model = _model(LAWS[kind], the_plant, bounds, perturbed, dict(cfg.get("model", {})))
     law = _law(kind, model, ctrl_cfg, eps)
-    traj = trajectory_from_config(dict(cfg.get("trajectory", {})), cls.default_trajectory())
+    traj = trajectory_from_config(dict(cfg.get("trajectory", {})), nominal.default_trajectory())
     if traj.n != the_plant.n:
-        raise ConfigError(f"trajectory has {traj.n} joints, robot {cls.name!r} has {the_plant.n}")
+        raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")
     sim = dict(cfg.get("simulation", {}))
     if rate is not None:
         sim["rate"] = rate

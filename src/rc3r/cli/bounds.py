@@ -20,9 +20,8 @@ CLI_SEED = 0
 
 def cmd_bounds(args) -> int:
     """``rc3r bounds [--box FILE] [--urdf PATH] [--json]``: both methods side by side."""
-    cls = robot_class(DEFAULT_ROBOT)
-    robot = cls.from_urdf(getattr(args, "urdf", None))
-    box = resolve_box(cls, robot, getattr(args, "box", None))
+    robot = robot_class(DEFAULT_ROBOT).from_urdf(getattr(args, "urdf", None))
+    box = resolve_box(robot, getattr(args, "box", None))
     a = paper_bounds(robot, box)
     b = certified_bounds(robot, box)
     s_b = sampled_rho_detail(robot, box, b.theta0, n=CLI_SAMPLES, seed=CLI_SEED)

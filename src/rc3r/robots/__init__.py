@@ -13,11 +13,13 @@ import importlib
 from ..errors import ConfigError
 from .base import Robot
 
-__all__ = ["Robot", "ROBOTS", "DEFAULT_ROBOT", "robot_class", "load_robot"]
+__all__ = ["Robot", "ROBOTS", "DEFAULT_ROBOT", "robot_class", "load_robot", "load_urdf_robot"]
 
 #: name -> "module:Class" (imported lazily).
 ROBOTS = {
     "rr3": "rc3r.robots.rr3.robot:RR3",
+    "ur5": "rc3r.robots.pinocchio:PinocchioRobot",
+    "panda": "rc3r.robots.pinocchio:PinocchioRobot",
 }
 
 #: The robot the command line uses when none is named: the paper's arm.
@@ -34,6 +36,17 @@ def robot_class(name: str = DEFAULT_ROBOT) -> type[Robot]:
 
 
 def load_robot(name: str = DEFAULT_ROBOT, urdf=None) -> Robot:
-    """The nominal robot ``name``, or the robot of that kind read from ``urdf``."""
+    """The nominal robot ``name``, or the robot of that kind read from ``urdf``.
+
+    A class that serves several names (:class:`~rc3r.robots.pinocchio.PinocchioRobot`) gets
+    the name: ``cls.nominal(name)``.
+    """
     cls = robot_class(name)
-    return cls.nominal() if urdf is None else cls.from_urdf(urdf)
+    if urdf is not None:
+        return cls.from_urdf(urdf)
+    return cls.nominal(name) if cls.name != name else cls.nominal()
+
+
+def load_urdf_robot(path) -> Robot:
+    """Any serial URDF arm, as a :class:`~rc3r.robots.pinocchio.PinocchioRobot`."""
+    return robot_class("ur5").from_urdf(path)

@@ -249,6 +249,37 @@ class PinocchioRobot(Robot):
             raise UrdfError(f"example-robot-data has no {rel} under {path.parents[len(Path(rel).parts) - 1]}")
         return cls.from_urdf(path, lock=lock, robot_name=name, **kwargs)
 
+    @classmethod
+    def nominal(cls, name: str = "ur5") -> "PinocchioRobot":
+        """The registry's constructor: :meth:`named`."""
+        return cls.named(name)
+
+    def default_box(self):
+        """None: a URDF arm has no default uncertainty (give ``--box`` or ``--payload``)."""
+        return None
+
+    def default_trajectory(self, amplitude: float = 0.5, omega: float = 1.0):
+        r"""Sines inside the joint limits: :math:`q_{d,i} = c_i + A_i \sin(\omega t + i\pi/3)`.
+
+        ``c_i`` is the middle of joint i's range (clipped to [-pi, pi]), ``A_i = min(amplitude,
+        0.3 x half the range)`` [rad], ``omega`` [rad/s]; so the reference stays inside the limits
+        with a margin of at least 70 % of the half range.
+        """
+        import math
+
+        from ..trajectory import Sines
+
+        lo, hi = self.joint_limits
+        c = np.clip(0.5 * (lo + hi), -math.pi, math.pi)
+        half = 0.5 * (hi - lo)
+        amp = np.minimum(amplitude, 0.3 * half)
+        terms = tuple((i + 1, float(amp[i]), float(omega), i * math.pi / 3) for i in range(self.n))
+        return Sines(tuple(float(x) for x in c), terms)
+
+    #: theta is linear in the standard parameters (first moments, inertia about the joint frame),
+    #: so exact ranges over a box follow from interval arithmetic (:mod:`rc3r.uncertainty.bounds`).
+    linear_in_standard_parameters = True
+
     # ---- sizes and parameters ---------------------------------------------------------
     @property
     def n(self) -> int:

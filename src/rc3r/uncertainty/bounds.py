@@ -343,6 +343,8 @@ def certified_bounds(robot, box: Box) -> Bounds:
         The box allows a mass <= 0 for ``p``.
     """
     box.check(robot)
+    if getattr(robot, "linear_in_standard_parameters", False):
+        return _linear_bounds(robot, box)
     S = _structure(robot)
     nom = robot.standard_parameters()
     nb, p = S.a.shape
@@ -389,6 +391,26 @@ def certified_bounds(robot, box: Box) -> Bounds:
         witness_lo=wit_lo,
         witness_hi=wit_hi,
     )
+
+
+def _linear_bounds(robot, box: Box) -> Bounds:
+    """Exact ranges when theta = c + K std is linear (a Pinocchio robot's base parameters).
+
+    Each theta_i is extremal at the corner where every parameter sits at the end its
+    coefficient's sign asks for (interval arithmetic is exact for one linear form).
+    """
+    nom = robot.standard_parameters()
+    c = robot.theta_of_standard(np.zeros(nom.size))
+    K = np.stack([robot.theta_of_standard(np.eye(nom.size)[j]) - c for j in range(nom.size)], axis=1)
+    lo_v, hi_v = nom + box.lower, nom + box.upper
+    wit_lo = np.where(K >= 0, lo_v, hi_v)
+    wit_hi = np.where(K >= 0, hi_v, lo_v)
+    theta_lo = c + np.einsum("ij,ij->i", K, wit_lo)
+    theta_hi = c + np.einsum("ij,ij->i", K, wit_hi)
+    rho_i = 0.5 * (theta_hi - theta_lo)
+    return Bounds(method="certified", theta0=0.5 * (theta_lo + theta_hi), rho=float(np.sqrt(np.sum(rho_i**2))),
+                  rho_i=rho_i, theta_lo=theta_lo, theta_hi=theta_hi, box=box, theta_nominal=robot.theta,
+                  witness_lo=wit_lo, witness_hi=wit_hi)
 
 
 def certified_radius(cert: Bounds, theta0) -> tuple[float, np.ndarray]:
