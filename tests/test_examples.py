@@ -23,3 +23,22 @@ def test_custom_law_runs_in_sampled_mode():
     assert "python engine" in line and "sampled 1000 Hz" in line and ": ok," in line
     err = float(re.search(r"max\|e\| = ([0-9.e+-]+) rad", line).group(1))
     assert err < 0.1
+
+
+def test_ur5_payload_robust_beats_fbl_on_the_same_plant():
+    """examples/ur5_payload.py (2 s): both laws finish, and the robust law with exact payload bounds
+    has a smaller max|e| than FBL on the UR5 carrying 5 kg."""
+    out = _run("ur5_payload", "2.0")
+    errs = {law: float(re.search(rf"{law} on .*max\|e\| = ([0-9.e+-]+) rad", out).group(1)) for law in ("fbl", "robust")}
+    assert ": ok;" in out and out.count(": ok;") == 2
+    assert errs["robust"] < errs["fbl"]
+
+
+def test_ur5_gains_in_the_config_are_the_scripts():
+    """The K of examples/ur5_payload.toml is what `--gains` computes (50 x diag M(q_d(0)))."""
+    from rc3r.io import read_toml
+
+    printed = _run("ur5_payload", "--gains")
+    k = [float(x) for x in re.search(r"K = \[(.*)\]", printed).group(1).split(",")]
+    cfg = read_toml(EXAMPLES / "ur5_payload.toml", "config")
+    assert cfg["gains"]["robust"]["K"] == k

@@ -161,3 +161,35 @@ def test_bad_config_values_refused_in_one_line(tmp_path, capsys, text, needle):
     lines = [ln for ln in err.splitlines() if ln.startswith("rc3r: error: ")]
     assert len(lines) == 1 and needle in lines[0] and "Traceback" not in err, err
     assert not out.exists()
+
+
+def test_run_robot_with_payload_from_the_command_line(tmp_path, capsys):
+    """`rc3r run --robot ur5 --payload 0:5`: the plant carries 5 kg, the controller's theta_0 is the
+    middle of the exact payload segment, and metrics.json says so."""
+    out = tmp_path / "u"
+    assert main(["run", "--robot", "ur5", "--payload", "0:5", "--payload-com", "0,0,0.1", "--controller", "fbl",
+                 "--perturbed", "--rate", "1000", "--duration", "0.2", "--out", str(out)]) == 0
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["robot"] == "pinocchio" and len(m["max_abs_error"]) == 6 and m["engine"] == "python"
+    assert m["plant"].endswith("+ payload 5 kg") and "payload segment" in m["model"]["theta_source"]
+    assert m["model"]["box"].startswith("payload of 0..5 kg")
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--payload", "5:1"], "LO <= HI"),
+    (["--payload", "a:b"], "LO:HI"),
+    (["--payload-com", "1,2"], "X,Y,Z"),
+    (["--robot", "nope"], "unknown robot"),
+])
+def test_bad_robot_or_payload_options(tmp_path, capsys, argv, needle):
+    assert main(["run", "--robot", "ur5"] + argv + ["--out", str(tmp_path / "x")]) == 2 if "--robot" not in argv \
+        else main(["run"] + argv + ["--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and "Traceback" not in err
+
+
+def test_verify_model_generic_robots_report_base_parameters(capsys):
+    """`rc3r verify-model --robot ur5 --json`: passes, 36 base parameters (the issue's reference count)."""
+    assert main(["verify-model", "--robot", "ur5", "--json", "--samples", "30"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["pass"] and d["base_parameters"] == 36

@@ -28,6 +28,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.pinocchio``          :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
 ``rc3r.robots.base_parameters``    numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``   compiled Slotine--Li regressor of a serial chain
+``rc3r.robots.pinocchio_bench``    ``rc3r bench``'s generic-robot section (UR5, Panda)
 ``rc3r.controllers``               control laws u = Y theta_eff + w and their registry
 ``rc3r.controllers._kernels``      compiled kernels of the built-in laws (generic over n, p)
 ``rc3r.trajectory``                desired trajectories (sines, quintic), compiled evaluation

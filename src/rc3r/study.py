@@ -56,7 +56,8 @@ class RunSpec:
 
 #: Keys a run configuration may hold, per table (docs/control.md).
 CONFIG_KEYS = {
-    "": ("robot", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "trajectory", "simulation"),
+    "": ("robot", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains", "trajectory",
+         "simulation"),
     "payload": ("mass", "com"),
     "plant": ("spec", "urdf", "box"),
     "model": ("theta", "rho"),
@@ -97,6 +98,10 @@ def _check_config(cfg: dict, kind_override=None) -> None:
         if "eps_i" in names:
             names.append("eps")
         _check_keys(ctrl, ["kind"] + names, "controller")
+    gains = _check_keys(cfg.get("gains", {}), tuple(LAWS), "gains")
+    for law, table in gains.items():
+        names = [f for f in LAWS[law].__dataclass_fields__ if f not in ("theta", "rho", "rho_i")]
+        _check_keys(table, names + (["eps"] if "eps_i" in names else []), f"gains.{law}")
     seed = cfg.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise ConfigError(f"config: seed must be an integer in [0, 2^63), got {seed!r}")
@@ -273,8 +278,9 @@ def _model(law_cls, plant, bounds: _Bounds, perturbed: bool, cfg: dict) -> dict:
     }
 
 
-def _law(kind: str, model: dict, cfg: dict, eps_override):
-    gains = {k: v for k, v in cfg.items() if k != "kind"}
+def _law(kind: str, model: dict, cfg: dict, eps_override, table: dict | None = None):
+    gains = dict(table or {})  # [gains.<law>] of the config, then [controller] wins
+    gains.update({k: v for k, v in cfg.items() if k != "kind"})
     names = {f for f in LAWS[kind].__dataclass_fields__}
     if eps_override is not None:
         gains["eps"] = eps_override
@@ -326,7 +332,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
             pass  # perturb() refuses the spec with its own message
     the_plant = _plant(nominal, bounds, spec, seed)
     model = _model(LAWS[kind], the_plant, bounds, perturbed, dict(cfg.get("model", {})))
-    law = _law(kind, model, ctrl_cfg, eps)
+    law = _law(kind, model, ctrl_cfg, eps, dict(cfg.get("gains", {}).get(kind, {})))
     traj = trajectory_from_config(dict(cfg.get("trajectory", {})), nominal.default_trajectory())
     if traj.n != the_plant.n:
         raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")

@@ -21,6 +21,7 @@ import sys
 
 from ..controllers import LAWS
 from ..errors import Rc3rError
+from ..robots import ROBOTS
 from ..simulate import ENGINES
 
 __all__ = ["main", "entry", "build_parser", "EXIT"]
@@ -56,13 +57,36 @@ def _positive(kind=float, allow_zero=False):
     return conv
 
 
+def _interval(text):
+    try:
+        lo, hi = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected LO:HI, got {text!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo <= hi):
+        raise argparse.ArgumentTypeError(f"expected finite 0 <= LO <= HI, got {text!r}")
+    return lo, hi
+
+
+def _vector3(text):
+    try:
+        v = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        v = ()
+    if len(v) != 3 or not all(math.isfinite(x) for x in v):
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z (three finite numbers), got {text!r}")
+    return v
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="rc3r", description=__doc__.splitlines()[0])
     p.add_argument("--version", action="version", version=f"rc3r {__import__('rc3r').__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    v = sub.add_parser("verify-model", help="cross-check the closed-form model against Pinocchio")
-    v.add_argument("--urdf", help="URDF of a 3R arm of the paper's structure (default: urdf/rr3.urdf)")
+    v = sub.add_parser("verify-model", help="cross-check a robot's model and regressor against Pinocchio")
+    v.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default rr3, the paper's arm)")
+    v.add_argument("--urdf", help="a URDF: of the paper's 3R structure (closed form), or with --robot any, or "
+                                  "with --generic any serial arm through Pinocchio")
+    v.add_argument("--generic", action="store_true", help="check --urdf as a generic Pinocchio arm")
     v.add_argument("--samples", type=_positive(int), default=1000, help="random states (default 1000)")
     v.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="RNG seed (default 0)")
     v.add_argument("--json", action="store_true", help="one JSON object on stdout")
@@ -83,6 +107,12 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--plant", help="plant: nominal (Table 1), upper, lower, paper-upper, "
                                   "corner:<30 bits>, random:<seed> (of the box), or a URDF path")
     r.add_argument("--box", help="box TOML: the plant's box and the controller's bounds (default: the paper's box)")
+    r.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default: config, else rr3)")
+    r.add_argument("--payload", type=_interval, metavar="LO:HI",
+                   help="unknown payload mass on the last link [kg]: the plant carries HI (see --plant), the "
+                        "controller gets exact bounds")
+    r.add_argument("--payload-com", type=_vector3, metavar="X,Y,Z",
+                   help="payload CoM in the last joint's frame [m] (default 0,0,0)")
     r.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")
     r.add_argument("--rate", type=_positive(), help="sampled-data controller at this rate [Hz] "
                                                     "(default: continuous time)")

@@ -101,9 +101,29 @@ def render_text(r: dict) -> str:
     else:
         lines.append(f"Peak memory of `rc3r paper`: {mem['peak_rss_mib']:.0f} MiB resident "
                      f"(wall {_si(mem['wall_s'])}, exit {mem['returncode']}).")
+    if "generic" in r:
+        lines += ["", _render_generic(r["generic"])]
     lines.append("")
     lines.append(f"Correctness: {'all checks pass' if r['checks_ok'] else 'SOME CHECKS FAIL'}. "
                  f"Benchmark wall time {_si(r['total_wall_s'])}.")
+    return "\n".join(lines)
+
+
+def _render_generic(g: dict) -> str:
+    """The generic-robot section: regressor vs rnea per robot, the UR5 payload runs, targets."""
+    lines = ["Generic URDF arms (PinocchioRobot), Slotine-Li Y per state vs one pin.rnea call, same run:", ""]
+    rows = [[name, str(x["n"]), str(x["p"]), _si(x["regressor_us"] * 1e-6), _si(x["regressor_single_us"] * 1e-6),
+             _si(x.get("pinocchio_path_us", float("nan")) * 1e-6), _si(x["rnea_us"] * 1e-6), f"{x['ratio']:.2f}x"]
+            for name, x in g["regressor"].items()]
+    lines += [_table(["robot", "n", "p", "Y (batch)", "Y (one call/state)", "Y (2 Pinocchio calls)", "pin.rnea",
+                      "Y batch / rnea"], rows, {1, 2, 3, 4, 5, 6, 7}), ""]
+    rows = [[k, v["engine"], v["status"], f"{v['duration_s']:g} s", _si(v["wall_s"]), f"{v['max_abs_error']:.3g}"]
+            for k, v in g["runs"].items()]
+    lines += [_table(["run", "engine", "status", "simulated", "wall", "max|e| [rad]"], rows, {3, 4, 5}), ""]
+    for key, t in g["targets"].items():
+        val = f"{t['measured']:.3g} {t['unit']}" + (" (extrapolated to 10 s)" if t["extrapolated"] else "")
+        lines.append(f"target {key}: {t['op']} {t['limit']:g} {t['unit']}: {val} -> "
+                     f"{'met' if t['met'] else 'NOT MET'}")
     return "\n".join(lines)
 
 
@@ -127,7 +147,11 @@ def _progress(msg: str) -> None:
 
 def cmd_bench(args) -> int:
     """``rc3r bench [--json] [--quick]``: print the tables (or one JSON object); 1 if a check fails."""
-    r = robot_class(DEFAULT_ROBOT).benchmark(quick=bool(getattr(args, "quick", False)), progress=_progress)
+    quick = bool(getattr(args, "quick", False))
+    r = robot_class(DEFAULT_ROBOT).benchmark(quick=quick, progress=_progress)
+    from ..robots.pinocchio_bench import bench_generic
+
+    r["generic"] = bench_generic(quick=quick, progress=_progress)
     if getattr(args, "json", False):
         print(json.dumps(_jsonable(r), indent=2))
     else:

@@ -4,7 +4,8 @@ from __future__ import annotations
 import json
 import math
 
-from ..robots import DEFAULT_ROBOT, robot_class
+from ..errors import ConfigError
+from ..robots import DEFAULT_ROBOT, load_robot, load_urdf_robot, robot_class
 from ..verify import VerifyReport, verify_model
 from . import EXIT
 
@@ -74,10 +75,20 @@ def render_text(report: VerifyReport) -> str:
 
 def cmd_verify_model(args) -> int:
     """Print the report (text or one JSON object); exit 0 iff every check passes, else 1."""
-    robot = robot_class(DEFAULT_ROBOT).from_urdf(args.urdf)
+    if args.generic:
+        if not args.urdf:
+            raise ConfigError("--generic needs --urdf PATH")
+        robot = load_urdf_robot(args.urdf)
+    elif args.robot:
+        robot = load_robot(args.robot, urdf=args.urdf)
+    else:
+        robot = robot_class(DEFAULT_ROBOT).from_urdf(args.urdf)
     report = verify_model(robot, samples=args.samples, seed=args.seed)
     if args.json:
-        print(json.dumps(report_to_dict(report), allow_nan=False))
+        out = report_to_dict(report)
+        out["robot"] = robot.describe()
+        out["base_parameters"] = robot.p
+        print(json.dumps(out, allow_nan=False))
     else:
         print(render_text(report))
     return EXIT["ok"] if report.passed else EXIT["check_failed"]

@@ -39,8 +39,9 @@ def cmd_run(args) -> int:
     :class:`~rc3r.errors.DivergenceError` (exit 3).
     """
     cfg = {} if args.config is None else read_toml(args.config, "config file")
-    spec = build_run(controller=args.controller, perturbed=args.perturbed, plant=args.plant, eps=args.eps,
-                     rate=args.rate, duration=args.duration, engine=args.engine, box=args.box, config=cfg)
+    spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
+                     eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
+                     payload=args.payload, payload_com=args.payload_com, config=cfg)
     _progress(f"rc3r run: {spec.name} on plant '{spec.plant.label}', {spec.options.mode}"
               f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
               f"{spec.options.duration:g} s, engine {spec.options.engine} ...")

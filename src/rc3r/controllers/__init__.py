@@ -169,10 +169,19 @@ class Law:
         raise NotImplementedError
 
     def pack(self, n: int) -> np.ndarray:
-        """``[p, theta, gains ...]`` for :mod:`rc3r.controllers._kernels` (n joints)."""
+        """``[p, theta, gains ...]`` for :mod:`rc3r.controllers._kernels` (n joints); cached per n.
+
+        A law is frozen, so its packed vector for a given n never changes; the cache saves the
+        concatenation on every control step of the Python engine.
+        """
         if self.code is None:
             raise ParameterError(f"law {self.name!r} has no compiled kernel")
-        return np.concatenate([[float(self.p)], self.theta, *self._gain_vectors(n)])
+        cache = self.__dict__.setdefault("_packed", {})
+        if n not in cache:
+            cp = np.concatenate([[float(self.p)], self.theta, *self._gain_vectors(n)])
+            cp.flags.writeable = False
+            cache[n] = cp
+        return cache[n]
 
     def describe(self) -> dict:
         """JSON-ready dict: name and every field (arrays as lists)."""

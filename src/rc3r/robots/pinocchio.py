@@ -400,6 +400,11 @@ class PinocchioRobot(Robot):
 
     def forward_dynamics(self, q, qd, u) -> np.ndarray:
         """Joint accelerations by ``pinocchio.aba``, (n,) or (N, n)."""
+        if np.ndim(q) == 1 and np.ndim(qd) == 1 and np.ndim(u) == 1:  # the simulator's path: one state
+            import pinocchio as pin
+
+            return np.array(pin.aba(self._model, self._datas()[0], np.asarray(q, float), np.asarray(qd, float),
+                                    np.asarray(u, float)))
         return self._batch("aba", q, qd, u)
 
     # ---- parameter sets ---------------------------------------------------------------

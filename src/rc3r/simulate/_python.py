@@ -36,8 +36,10 @@ class _Loop:
     def plant_rhs(self, x, u):
         n = self.n
         self.nrhs += 1
-        qdd = self.plant.forward_dynamics(x[0:n], x[n:2 * n], u)
-        return np.concatenate([x[n:2 * n], qdd])
+        out = np.empty(2 * n)
+        out[:n] = x[n:2 * n]
+        out[n:] = self.plant.forward_dynamics(x[0:n], x[n:2 * n], u)
+        return out
 
     def rhs(self, t, x):
         u, zdot, _ = self.control(t, x)

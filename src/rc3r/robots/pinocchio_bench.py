@@ -1,0 +1,54 @@
+"""``rc3r bench``'s generic-robot section: the Slotine--Li regressor of a URDF arm against one
+``pinocchio.rnea`` call, and a 10 s robust run of the UR5 with a payload at 1 kHz.
+
+Targets (the any-URDF issue): the UR5 regressor within 6x one ``pin.rnea`` call measured in the
+same run; the 10 s robust run in under 2 s on this 2-core machine. Both are reported, never
+asserted (tests do not assert wall-clock times).
+"""
+from __future__ import annotations
+
+import time
+
+__all__ = ["bench_generic", "GENERIC_TARGETS"]
+
+#: name -> (limit, comparison, unit, description), as ``rc3r.robots.rr3.bench.TARGETS``.
+GENERIC_TARGETS = {
+    "ur5_regressor_vs_rnea": (6.0, "<=", "x", "UR5 Slotine-Li Y per state (batch) / one pin.rnea call"),
+    "ur5_payload_robust_1khz_10s": (2.0, "<=", "s", "UR5 + payload, robust law, 10 s at 1 kHz: wall time"),
+}
+
+
+def bench_generic(quick: bool = False, progress=None) -> dict:
+    """Measure the generic-robot targets; returns ``{"regressor": {...}, "runs": {...}, "targets": {...}}``."""
+    from ..study import build_run, execute
+    from . import load_robot
+    from .pinocchio import bench_regressor
+
+    say = progress or (lambda msg: None)
+    out = {"regressor": {}, "runs": {}}
+    for name in ("ur5", "panda"):
+        say(f"generic: {name} Slotine-Li regressor vs pin.rnea ...")
+        robot = load_robot(name)
+        z = [[0.1] * robot.n] * 2
+        robot.regressor(z, z, z, z)  # warm-up: numba compile or cache load is not timed
+        out["regressor"][name] = bench_regressor(robot, n=200 if quick else 2000, repeat=1 if quick else 3)
+    duration = 0.5 if quick else 10.0
+    gains = {"robust": {"K": [150.9369, 191.732, 41.8667, 12.0841, 12.5152, 0.8568], "Lambda": 20.0, "eps": 5.0}}
+    for law in ("fbl", "robust"):
+        spec = build_run(robot="ur5", controller=law, perturbed=True, payload=(0.0, 5.0), payload_com=(0, 0, 0.1),
+                         rate=1000.0, duration=duration, config={"gains": gains})
+        say(f"generic: UR5 + payload, {law}, {duration:g} s at 1 kHz (python engine) ...")
+        t0 = time.perf_counter()
+        res, m = execute(spec)
+        out["runs"][f"ur5-payload-{law}@1kHz"] = {
+            "wall_s": res.wall_time_s, "execute_s": time.perf_counter() - t0, "duration_s": duration,
+            "engine": res.engine, "status": res.status, "max_abs_error": max(m["max_abs_error"])}
+    scale = 10.0 / duration
+    measured = {"ur5_regressor_vs_rnea": out["regressor"]["ur5"]["ratio"],
+                "ur5_payload_robust_1khz_10s": out["runs"]["ur5-payload-robust@1kHz"]["wall_s"] * scale}
+    out["targets"] = {}
+    for key, (limit, op, unit, what) in GENERIC_TARGETS.items():
+        x = measured[key]
+        out["targets"][key] = {"limit": limit, "op": op, "unit": unit, "description": what, "measured": x,
+                               "met": bool(x <= limit), "extrapolated": bool(quick and unit == "s")}
+    return out
