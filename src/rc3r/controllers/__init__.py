@@ -192,58 +192,45 @@ class Law:
         return out
 
 
-def _gain(default):
-    return field(default=default)
+@dataclass(frozen=True, eq=False)
+class _PD(Law):
+    """Laws with diagonal ``Kp`` and ``Kd`` (> 0). Layout of :meth:`pack`: ``[p, theta, Kp (n), Kd (n)]``."""
+
+    Kp: float | np.ndarray = 100.0
+    Kd: float | np.ndarray = 100.0
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "Kp", _positive("Kp", self.Kp))
+        object.__setattr__(self, "Kd", _positive("Kd", self.Kd))
+
+    def _gain_vectors(self, n):
+        return [_sized("Kp", self.Kp, n), _sized("Kd", self.Kd, n)]
 
 
 @dataclass(frozen=True, eq=False)
-class FeedbackLinearization(Law):
-    """Computed torque with diagonal ``Kp`` [1/s^2] and ``Kd`` [1/s].
+class FeedbackLinearization(_PD):
+    """Computed torque with diagonal ``Kp`` [1/s^2] and ``Kd`` [1/s] (the paper's 100, 100)."""
 
-    Layout of :meth:`pack`: ``[p, theta, Kp (n), Kd (n)]``.
-    """
-
-    Kp: float | np.ndarray = _gain(100.0)
-    Kd: float | np.ndarray = _gain(100.0)
     name = "fbl"
     code = _K.FBL
 
-    def __post_init__(self):
-        super().__post_init__()
-        object.__setattr__(self, "Kp", _positive("Kp", self.Kp))
-        object.__setattr__(self, "Kd", _positive("Kd", self.Kd))
-
-    def _gain_vectors(self, n):
-        return [_sized("Kp", self.Kp, n), _sized("Kd", self.Kd, n)]
-
 
 @dataclass(frozen=True, eq=False)
-class PDGravity(Law):
-    """PD plus gravity compensation from the model theta: ``Kp`` [N m/rad], ``Kd`` [N m s/rad].
+class PDGravity(_PD):
+    """PD plus gravity compensation from the model theta: ``Kp`` [N m/rad], ``Kd`` [N m s/rad]."""
 
-    Layout of :meth:`pack`: ``[p, theta, Kp (n), Kd (n)]``.
-    """
-
-    Kp: float | np.ndarray = _gain(500.0)
-    Kd: float | np.ndarray = _gain(100.0)
+    Kp: float | np.ndarray = 500.0
     name = "pd"
     code = _K.PD
-
-    def __post_init__(self):
-        super().__post_init__()
-        object.__setattr__(self, "Kp", _positive("Kp", self.Kp))
-        object.__setattr__(self, "Kd", _positive("Kd", self.Kd))
-
-    def _gain_vectors(self, n):
-        return [_sized("Kp", self.Kp, n), _sized("Kd", self.Kd, n)]
 
 
 @dataclass(frozen=True, eq=False)
 class _Sliding(Law):
     """Laws on r = e_dot + Lambda e: ``K`` [N m s/rad] and ``Lambda`` [1/s], diagonal, > 0."""
 
-    K: float | np.ndarray = _gain(100.0)
-    Lambda: float | np.ndarray = _gain(50.0)
+    K: float | np.ndarray = 100.0
+    Lambda: float | np.ndarray = 50.0
 
     def __post_init__(self):
         super().__post_init__()
@@ -313,7 +300,7 @@ class Adaptive(_Sliding):
     Layout of :meth:`pack`: ``[p, theta, K (n), Lambda (n), Gamma (p)]``.
     """
 
-    Gamma: float | np.ndarray = _gain(10.0)
+    Gamma: float | np.ndarray = 10.0
     name = "adaptive"
     code = _K.ADAPTIVE
 
