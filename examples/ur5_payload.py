@@ -13,7 +13,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
 
 import rc3r
 from rc3r.io import read_toml
@@ -23,9 +22,10 @@ CONFIG = Path(__file__).with_name("ur5_payload.toml")
 
 def gains() -> list[float]:
     """50 x diag M(q_d(0)) of the nominal UR5 [N m s/rad]: one velocity-loop bandwidth for every joint."""
+    from rc3r.controllers import inertia_scaled_gain
+
     ur5 = rc3r.load_robot("ur5")
-    q0 = ur5.default_trajectory().evaluate(0.0)[0]
-    return [float(x) for x in 50.0 * np.diag(ur5.mass_matrix(q0))]
+    return [float(x) for x in inertia_scaled_gain(ur5, ur5.default_trajectory().evaluate(0.0)[0], 50.0)]
 
 
 def main(duration: float = 10.0, figure: str | None = None) -> dict:

@@ -45,3 +45,19 @@ def th(arm):
 def pdata(arm):
     """A Pinocchio Data for the committed URDF's model."""
     return arm.model.createData()
+
+
+@pytest.fixture(scope="session")
+def ur5():
+    """The UR5 of example-robot-data as a PinocchioRobot (36 base parameters)."""
+    from rc3r.robots.pinocchio import PinocchioRobot
+
+    return PinocchioRobot.named("ur5")
+
+
+@pytest.fixture(scope="session")
+def panda():
+    """The Panda arm of example-robot-data, fingers locked (43 base parameters)."""
+    from rc3r.robots.pinocchio import PinocchioRobot
+
+    return PinocchioRobot.named("panda")

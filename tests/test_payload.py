@@ -24,16 +24,6 @@ INERTIA = np.array([[0.004, 0.0005, 0.0], [0.0005, 0.005, 0.0002], [0.0, 0.0002,
 EXACT = 1e-12
 
 
-@pytest.fixture(scope="module")
-def ur5():
-    return PinocchioRobot.named("ur5")
-
-
-@pytest.fixture(scope="module")
-def panda():
-    return PinocchioRobot.named("panda")
-
-
 def test_payload_parameters_are_pinocchio_inertias():
     """m w(c) + (0, iota(I_c)) == pinocchio.Inertia(m, c, I_c).toDynamicParameters() (w: unit point mass)."""
     c = np.array(COM)

@@ -24,16 +24,6 @@ REPO_3R = "urdf/rr3.urdf"
 
 
 @pytest.fixture(scope="module")
-def ur5():
-    return PinocchioRobot.named("ur5")
-
-
-@pytest.fixture(scope="module")
-def panda():
-    return PinocchioRobot.named("panda")
-
-
-@pytest.fixture(scope="module")
 def arm3(request):
     return PinocchioRobot.from_urdf(request.config.rootpath / REPO_3R)
 

@@ -12,6 +12,8 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
+
 from .errors import ConfigError
 
 try:  # Python >= 3.11
@@ -19,7 +21,12 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # Python 3.10: the same parser, as the package tomli
     import tomli as tomllib
 
-__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml", "tomllib", "apply_umask"]
+__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml", "tomllib", "apply_umask", "floats"]
+
+
+def floats(x):
+    """JSON-ready floats of an array (nested lists keep its shape), or None for None."""
+    return None if x is None else np.asarray(x, dtype=float).tolist()
 
 
 def _umask() -> int:

@@ -27,6 +27,7 @@ import numpy as np
 
 from .controllers import LAWS, make_law
 from .errors import ConfigError, ParameterError
+from .io import floats as _floats
 from .robots import DEFAULT_ROBOT, load_robot
 from .simulate import SimOptions, SimResult, simulate
 from .simulate.metrics import run_metrics
@@ -86,8 +87,9 @@ def _check_config(cfg: dict, kind_override=None) -> None:
         if table in cfg:
             _check_keys(cfg[table], CONFIG_KEYS[table], table)
     if "controller" in cfg:
-        ctrl = _check_keys(cfg["controller"], tuple(cfg["controller"]) if isinstance(cfg["controller"], dict)
-                           else (), "controller")
+        ctrl = cfg["controller"]
+        if not isinstance(ctrl, dict):
+            raise ConfigError(f"config: controller must be a table, got {ctrl!r}")
         kind = ctrl.get("kind", "robust")
         if not isinstance(kind, str) or kind not in LAWS:
             raise ConfigError(f"config: [controller] kind must be one of {', '.join(LAWS)}, got {kind!r}")
@@ -128,10 +130,6 @@ def _payload(mass, com):
         raise ConfigError(f"payload mass must satisfy 0 <= lo <= hi (finite) and com be 3 finite numbers, "
                           f"got {mass!r}, {com!r}")
     return (lo, hi), c
-
-
-def _floats(x):
-    return None if x is None else [float(v) for v in np.asarray(x, dtype=float).ravel()]
 
 
 def resolve_box(nominal, box_path=None):

@@ -3,14 +3,11 @@ from __future__ import annotations
 
 import json
 
+from ..io import floats as _floats
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..study import resolve_box
 from ..uncertainty import certified_bounds, certified_radius, paper_bounds, sampled_rho_detail
 from . import EXIT
-
-
-def _floats(x):
-    return None if x is None else [float(v) for v in x]
 
 
 #: Samples and seed of the lower bound printed by ``rc3r bounds``.

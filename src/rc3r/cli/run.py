@@ -24,10 +24,6 @@ def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def _write_run(res, m: dict, out: Path, title: str) -> None:
-    res.save(out, m, title)
-
-
 def _fmt3(x) -> str:
     return " ".join(f"{v:.3g}" for v in x)
 
@@ -49,7 +45,7 @@ def cmd_run(args) -> int:
     with output_dir(out) as tmp:  # --out checked and locked before simulating
         res, m = execute(spec)
         m["provenance"] = provenance(config=cfg, seed=spec.seed)
-        _write_run(res, m, tmp, spec.name)
+        res.save(tmp, m, spec.name)
     print(f"{spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, final bound = {_fmt3(m['final_error_bound'])} rad, "
           f"chattering = {_fmt3(m['chattering'])} N m/s, wall {m['wall_time_s']:.2f} s -> {out}/")
     try:
@@ -90,7 +86,7 @@ def _paper(paper, out: Path) -> int:
             res, m = execute(spec)
             _progress(f"    {res.message}; max|e| = {_fmt3(m['max_abs_error'])} rad, wall {m['wall_time_s']:.2f} s")
             sub = out / mode / spec.name
-            _write_run(res, m, sub, spec.name)
+            res.save(sub, m, spec.name)
             rows.append(m)
             results[(mode, spec.name)] = res
         plot_error_comparison({n: r for (md, n), r in results.items() if md == mode},

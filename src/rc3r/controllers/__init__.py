@@ -38,7 +38,7 @@ so each law's arithmetic exists once.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -56,6 +56,7 @@ __all__ = [
     "register_law",
     "make_law",
     "default_gains",
+    "inertia_scaled_gain",
 ]
 
 
@@ -366,3 +367,15 @@ def make_law(name: str, theta, *, rho=None, rho_i=None, **gains) -> Law:
         if key in names and key not in kwargs and value is not None:
             kwargs[key] = value
     return cls(theta, **kwargs)
+
+
+def inertia_scaled_gain(robot, q, bandwidth: float = 50.0) -> np.ndarray:
+    """Diagonal gain ``bandwidth * diag M(q)`` [N m s/rad], shape (n,).
+
+    With ``K_i = b M_ii`` every joint's velocity loop ``M qdd = -K r`` has the same bandwidth
+    ``b`` [1/s]; a sampled loop at period T needs ``b T < 2``. The paper's K = 100 on every
+    joint suits its 3R (10 kg links) but not an arm with a light wrist (docs/generic.md).
+    """
+    if not (np.isfinite(bandwidth) and bandwidth > 0):
+        raise ParameterError(f"bandwidth must be finite and > 0, got {bandwidth}")
+    return float(bandwidth) * np.diag(robot.mass_matrix(np.asarray(q, dtype=float)))

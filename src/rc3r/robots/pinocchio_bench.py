@@ -33,7 +33,11 @@ def bench_generic(quick: bool = False, progress=None) -> dict:
         robot.regressor(z, z, z, z)  # warm-up: numba compile or cache load is not timed
         out["regressor"][name] = bench_regressor(robot, n=200 if quick else 2000, repeat=1 if quick else 3)
     duration = 0.5 if quick else 10.0
-    gains = {"robust": {"K": [150.9369, 191.732, 41.8667, 12.0841, 12.5152, 0.8568], "Lambda": 20.0, "eps": 5.0}}
+    from ..controllers import inertia_scaled_gain
+
+    ur5 = load_robot("ur5")  # the gains of examples/ur5_payload.toml: K = 50 diag M(q_d(0)), Lambda 20, eps 5
+    k = inertia_scaled_gain(ur5, ur5.default_trajectory().evaluate(0.0)[0], 50.0)
+    gains = {"robust": {"K": k.tolist(), "Lambda": 20.0, "eps": 5.0}}
     for law in ("fbl", "robust"):
         spec = build_run(robot="ur5", controller=law, perturbed=True, payload=(0.0, 5.0), payload_com=(0, 0, 0.1),
                          rate=1000.0, duration=duration, config={"gains": gains})

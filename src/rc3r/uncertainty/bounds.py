@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError, ParameterError
+from ..io import floats as _floats
 from .box import Box, body_keys, shifted
 
 __all__ = [
@@ -102,10 +103,6 @@ def paper_upper(robot, box: Box, inertia_keys=PAPER_INERTIA_KEYS):
     return shifted(robot, np.where(_inertia_mask(robot, keys), box.upper, 0.0), "paper-upper")
 
 # ------------------------------------------------------------------------ Bounds
-
-
-def _floats(x):
-    return None if x is None else np.asarray(x, dtype=float).tolist()
 
 
 @dataclass(frozen=True, eq=False)

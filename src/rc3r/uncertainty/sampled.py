@@ -11,7 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from .bounds import _floats, _structure, _Structure
+from ..io import floats as _floats
+from .bounds import _structure, _Structure
 from .box import Box
 
 __all__ = ["SampledRho", "sampled_rho", "sampled_rho_detail"]
