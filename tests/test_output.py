@@ -92,3 +92,25 @@ def test_metrics_carry_provenance_and_the_seed_actually_used(tmp_path):
     assert set(prov["versions"]) >= {"rc3r", "numpy", "scipy", "numba", "pinocchio", "python"}
     assert prov["git"] is None or len(prov["git"]["commit"]) == 40
     assert "config" in prov and isinstance(prov["command"], list)
+
+
+def test_out_never_replaces_a_directory_rc3r_did_not_write(tmp_path, monkeypatch, capsys):
+    """`--out ''`, `--out .`, the current directory's parent, a git work tree or any non-empty
+    directory without an rc3r result are refused before anything runs, and left as they were.
+    (Found the hard way: `rc3r run --out ''` once replaced the whole working directory.)"""
+    from rc3r.cli import main
+
+    work = tmp_path / "project" / "sub"
+    work.mkdir(parents=True)
+    (work / "source.py").write_text("keep me")
+    (tmp_path / "repo" / ".git").mkdir(parents=True)
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "todo.txt").write_text("keep me too")
+    monkeypatch.chdir(work)
+    for out in ("", ".", "..", str(work), str(tmp_path / "repo"), str(tmp_path / "notes")):
+        assert main(["run", "--duration", "0.05", "--out", out]) == 2, out
+        err = capsys.readouterr().err
+        assert err.startswith("rc3r: error: --out") and err.count("\n") == 1, err
+    assert (work / "source.py").read_text() == "keep me"
+    assert (tmp_path / "notes" / "todo.txt").read_text() == "keep me too"
+    assert (tmp_path / "repo" / ".git").is_dir()

@@ -63,7 +63,7 @@ CONFIG_KEYS = {
     "plant": ("spec", "urdf", "box"),
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
-    "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "engine", "q_max", "qd_max", "u_max"),
+    "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "engine", "jac_reuse", "q_max", "qd_max", "u_max"),
 }
 
 

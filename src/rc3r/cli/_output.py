@@ -27,14 +27,27 @@ from ..io import apply_umask
 __all__ = ["output_dir", "check_output_path"]
 
 
+#: Files that mark a directory as rc3r's own output (it may then be replaced as a whole).
+OUTPUT_MARKERS = ("metrics.json", "summary.json", "sweep.json", "stability.json", "campaign.json", "runs.csv")
+
+
 def check_output_path(path) -> Path:
-    """Refuse an output directory that cannot be (re)written as a whole; return it absolute."""
+    """Refuse an output directory that cannot be (re)written as a whole; return it absolute.
+
+    Refused: an empty path, a filesystem root, the current directory or one that contains it,
+    a symbolic link, a file or device, and an existing non-empty directory that is not an
+    earlier rc3r output (none of :data:`OUTPUT_MARKERS`): replacing it would delete files
+    rc3r did not write (a source tree, a git repository).
+    """
     p = Path(path)
-    if str(path).strip() == "":
-        raise ConfigError("--out is empty")
+    if str(path).strip() in ("", "."):
+        raise ConfigError("--out is empty or '.'; give a directory for the results")
     absolute = Path(os.path.abspath(p))
     if absolute.parent == absolute:
         raise ConfigError(f"--out {path} is a filesystem root; give a directory for the results")
+    cwd = Path(os.path.abspath(os.getcwd()))
+    if cwd == absolute or absolute in cwd.parents:
+        raise ConfigError(f"--out {path} is the current directory or contains it; give a directory for the results")
     if p.is_symlink():
         raise ConfigError(f"--out {path} is a symbolic link; give the directory itself")
     if p.exists():
@@ -42,6 +55,13 @@ def check_output_path(path) -> Path:
         if not stat.S_ISDIR(mode):
             kind = "a file" if stat.S_ISREG(mode) else "not a directory (a device or special file)"
             raise ConfigError(f"--out {path} is {kind}; give a directory for the results")
+        try:
+            names = {e.name for e in os.scandir(p)}
+        except OSError as exc:
+            raise ConfigError(f"--out {path}: cannot read it: {exc.strerror or exc}") from None
+        if ".git" in names or (names and not names & set(OUTPUT_MARKERS)):
+            raise ConfigError(f"--out {path} is a non-empty directory that rc3r did not write (no "
+                              f"{', '.join(OUTPUT_MARKERS[:2])} ...); refusing to replace it: give another directory")
     parent = absolute.parent
     try:
         parent.mkdir(parents=True, exist_ok=True)

@@ -1,7 +1,7 @@
 """Status codes of a simulation run, shared by every engine, and the compiled bound check.
 
 0 ok, 1 non-finite state, 2 |q| bound, 3 |qd| bound, 4 |u| bound, 5 mass matrix not
-positive definite, 6 step size underflow.
+positive definite, 6 step size underflow, 7 interrupted (SIGINT/SIGTERM; not a divergence).
 """
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import math
 
 from numba import njit
 
-OK, NONFINITE, QBOUND, QDBOUND, UBOUND, NOTPD, HMIN = 0, 1, 2, 3, 4, 5, 6
+OK, NONFINITE, QBOUND, QDBOUND, UBOUND, NOTPD, HMIN, INTERRUPTED = 0, 1, 2, 3, 4, 5, 6, 7
 
 STATUS_TEXT = {
     OK: "ok",
@@ -19,6 +19,7 @@ STATUS_TEXT = {
     UBOUND: "|u| exceeded its bound",
     NOTPD: "plant mass matrix not positive definite",
     HMIN: "integrator step size underflow",
+    INTERRUPTED: "interrupted (Ctrl-C or SIGTERM)",
 }
 
 

@@ -7,7 +7,8 @@ controller state ``z`` (the adaptive law's theta estimate; empty otherwise).
   time). The robust law's boundary layer makes the loop stiff (gain ``rho/eps Y Y^T``
   ~ 1e6), so the integrator is the L-stable Rosenbrock pair of Shampine & Reichelt,
   "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18 (1997) (MATLAB's ode23s): order 2
-  step, order 3 error estimate, Jacobian by forward differences every step.
+  step, order 3 error estimate, Jacobian by forward differences, kept for
+  ``jac_reuse`` accepted steps (refreshed after a rejection; 1 = every step as ode23s).
   Steps are clipped to hit every output time exactly.
 * :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and
   held (zero-order hold); the plant is integrated over each period by classical RK4
@@ -30,7 +31,7 @@ from ...simulate.status import HMIN, NOTPD, OK, check
 from ...trajectory import reference_into
 from . import kernels as K
 
-_JIT = dict(cache=True, nogil=True)
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
 
 
 @njit(**dict(_JIT, inline="always"))
@@ -104,10 +105,32 @@ def _lu_solve(LU, piv, b):
 
 
 @njit(**_JIT)
+def _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w):
+    """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x))."""
+    n = x.shape[0]
+    sqeps = math.sqrt(2.220446049250313e-16)
+    for j in range(n):
+        dx = sqeps * max(abs(x[j]), 1e-3)
+        xj = x[j]
+        x[j] = xj + dx
+        closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
+        x[j] = xj
+        for i in range(n):
+            J[i, j] = (Fp[i] - F0[i]) / dx
+    dt = sqeps * max(abs(t), 1.0)
+    closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
+    for i in range(n):
+        Ft[i] = (Fp[i] - F0[i]) / dt
+    return n + 1
+
+
+@njit(**_JIT)
 def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hmax, lim,
-                         X, U, R, ynorm):
+                         X, U, R, ynorm, jac_reuse):
     """Integrate from ``t_out[0]``; store x, u, q_d rows at every ``t_out``.
 
+    The Jacobian is recomputed every ``jac_reuse`` accepted steps and after any
+    rejected step taken with an older one (``jac_reuse = 1``: every step, as ode23s).
     Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
     ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
     """
@@ -134,7 +157,7 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
     if st != OK:
         return st, 1, nrhs, nsteps, nrej, t
     h = h0
-    sqeps = math.sqrt(2.220446049250313e-16)
+    jac_age = jac_reuse  # accepted steps since the Jacobian was computed
     for k in range(1, t_out.shape[0]):
         t_next = t_out[k]
         while t < t_next:
@@ -143,20 +166,9 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             if t + h >= t_next - 1e-12 * max(1.0, abs(t_next)):
                 h = t_next - t
                 last = True
-            # Jacobian by forward differences (F0 = f(t, x) is current)
-            for j in range(n):
-                dx = sqeps * max(abs(x[j]), 1e-3)
-                xj = x[j]
-                x[j] = xj + dx
-                closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
-                x[j] = xj
-                for i in range(n):
-                    J[i, j] = (Fp[i] - F0[i]) / dx
-            dt = sqeps * max(abs(t), 1.0)
-            closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
-            for i in range(n):
-                Ft[i] = (Fp[i] - F0[i]) / dt
-            nrhs += n + 1
+            if jac_age >= jac_reuse:
+                nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
+                jac_age = 0
             while True:
                 hd = h * d
                 for i in range(n):
@@ -192,10 +204,15 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
                     break
                 nrej += 1
                 last = False
+                if jac_age > 0:  # rejected with an old Jacobian: refresh it first
+                    nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3,
+                                      v, a, r, w)
+                    jac_age = 0
                 h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / 3.0)) if err < 1e300 else 0.1 * h
                 if h < 1e-14 * max(1.0, abs(t)):
                     return HMIN, k, nrhs, nsteps, nrej, t
             nsteps += 1
+            jac_age += 1
             t = t_next if last else t + h
             for i in range(n):
                 x[i] = xnew[i]
@@ -221,9 +238,10 @@ def _plant_rhs(x, u, thp, l2, g0, xdot, w33, w3):
 
 
 @njit(**_JIT)
-def integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0, lim,
+def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0, lim,
                       X, U, R, ynorm, tv):
-    """Zero-order-hold loop: ``nsamples`` periods of ``Ts``; store every ``dec``-th sample.
+    """Zero-order-hold loop: ``nsamples`` periods of ``Ts`` from sample ``s0`` (t = (s0 + s) Ts, exact
+    whatever the chunking); store every ``dec``-th sample.
 
     ``tv`` (3,) accumulates the total variation of u over all samples.
     Returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``.
@@ -240,7 +258,7 @@ def integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0,
     nrhs = 0
     stored = 0
     for s in range(nsamples + 1):
-        t = t0 + s * Ts
+        t = (s0 + s) * Ts
         reference_into(tp, t, ref)
         yn = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, zdot, Y, xi, v, a, r, w)
         if s > 0:
@@ -274,14 +292,14 @@ def integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0,
                 x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
         for i in range(n - 6):  # controller state: forward Euler, as a digital controller
             x[6 + i] += Ts * zdot[i]
-    return OK, stored, nrhs, nsamples, t0 + nsamples * Ts
+    return OK, stored, nrhs, nsamples, (s0 + nsamples) * Ts
 
 
 class FastEngine:
     """The 3R's compiled simulator behind the interface :mod:`rc3r.simulate` expects.
 
     ``continuous(...)`` returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``;
-    ``sampled(...)`` returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``; both fill
+    ``sampled(..., s0, ...)`` (first sample index) returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``; both fill
     the output arrays ``X`` (state), ``U`` (torque), ``R`` (q_d), ``yn`` (||Y^T r||).
     """
 
@@ -289,13 +307,13 @@ class FastEngine:
     p = 15
 
     @staticmethod
-    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn):
+    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse=1):
         l2, g0 = plant.params.lengths[1], plant.params.g0
         return integrate_continuous(x0, t_out, plant.theta, code, cp, tp, l2, g0, rtol, atol, h0, hmax,
-                                    lim, X, U, R, yn)
+                                    lim, X, U, R, yn, jac_reuse)
 
     @staticmethod
-    def sampled(plant, code, cp, tp, x0, t0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv):
+    def sampled(plant, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv):
         l2, g0 = plant.params.lengths[1], plant.params.g0
-        return integrate_sampled(x0, t0, Ts, nsamples, dec, nsub, plant.theta, code, cp, tp, l2, g0, lim,
+        return integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, plant.theta, code, cp, tp, l2, g0, lim,
                                  X, U, R, yn, tv)
