@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 
 from .io import atomic_savefig
 
-__all__ = ["run_figure", "plot_run", "plot_error_comparison", "plot_tradeoff"]
+__all__ = ["run_figure", "plot_run", "plot_error_comparison"]
 
 
 def plot_run(res, path: str | Path, title: str) -> Path:
@@ -60,21 +60,3 @@ def plot_error_comparison(runs: dict, path: str | Path, title: str) -> Path:
     for name, res in runs.items():
         ax.semilogy(res.t, np.maximum(np.abs(res.e).max(axis=1), 1e-16), lw=0.9, label=name)
     return _finish(fig, ax, path, title, "t [s]", "max_j |e_j| [rad]")
-
-
-def plot_tradeoff(rows: list[dict], path: str | Path, title: str) -> Path:
-    """Final error bound vs chattering, one curve per mode, points labelled by eps."""
-    fig = Figure(figsize=(8, 5), constrained_layout=True)
-    ax = fig.subplots()
-    for mode in sorted({r["mode_label"] for r in rows}):
-        pts = [r for r in rows if r["mode_label"] == mode and r["status"] == "ok"]
-        if not pts:
-            continue
-        x = [sum(r["chattering"]) for r in pts]
-        y = [max(r["final_error_bound"]) for r in pts]
-        ax.loglog(x, y, "o-", label=mode)
-        for r, xi, yi in zip(pts, x, y):
-            ax.annotate(f"{r['eps']:.3g}", (xi, yi), fontsize=7, textcoords="offset points", xytext=(3, 3))
-    return _finish(fig, ax, path, title,
-                   "chattering: total variation of u per second, summed over joints [N m/s]",
-                   "final error bound max_j max_{t>T-1} |e_j| [rad]")

@@ -17,7 +17,9 @@ import argparse
 import importlib
 import math
 import os
+import signal
 import sys
+import threading
 
 from ..controllers import LAWS
 from ..errors import Rc3rError
@@ -77,6 +79,31 @@ def _vector3(text):
     return v
 
 
+def _controllers(text):
+    names = [c.strip() for c in text.split(",") if c.strip()]
+    bad = [c for c in names if c not in LAWS]
+    if not names or bad:
+        raise argparse.ArgumentTypeError(f"unknown controller(s) {', '.join(bad) or '(none)'}; "
+                                         f"choose from {', '.join(LAWS)}")
+    return ",".join(dict.fromkeys(names))
+
+
+def _campaign_args(p, out: str, plants: bool = False) -> None:
+    """Options every campaign shares."""
+    if plants:
+        p.add_argument("--n", type=_positive(int, allow_zero=True), default=0,
+                       help="plants drawn from the box (default 0: the nominal plant, the paper's perturbed case)")
+        p.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="seed of the plants")
+    p.add_argument("--duration", type=_positive(), help="simulated time per run [s] (default 10)")
+    p.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default rr3)")
+    p.add_argument("--box", help="box TOML (default: the robot's box)")
+    p.add_argument("--config", help="TOML with gains, trajectory, bounds (docs/control.md)")
+    p.add_argument("--out", default=out, help=f"output directory (default {out})")
+    p.add_argument("--workers", type=_positive(int), help="local worker processes (default: all cores)")
+    p.add_argument("--scheduler", help="address of a Dask scheduler (tcp://HOST:PORT) instead of local workers")
+    p.add_argument("--resume", action="store_true", help="continue the campaign in --out, skipping finished runs")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="rc3r", description=__doc__.splitlines()[0])
     p.add_argument("--version", action="version", version=f"rc3r {__import__('rc3r').__version__}")
@@ -124,10 +151,31 @@ def build_parser() -> argparse.ArgumentParser:
     pa = sub.add_parser("paper", help="the five scenarios of section 4, figures and summary")
     pa.add_argument("--out", default="out/paper", help="output directory (default out/paper)")
 
-    s = sub.add_parser("sweep-eps", help="error bound vs chattering over a range of eps")
-    s.add_argument("--out", default="out/sweep-eps", help="output directory")
-    s.add_argument("--eps", type=_positive(), nargs="+", help="eps values (default 10 log-spaced)")
-    s.add_argument("--duration", type=_positive(), help="simulated time [s] (default 10)")
+    mc = sub.add_parser("montecarlo", help="every controller on N plants drawn from the box")
+    mc.add_argument("--n", type=_positive(int), default=200, help="plants (default 200)")
+    mc.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="campaign seed (default 0)")
+    mc.add_argument("--controllers", default="fbl,robust", type=_controllers,
+                    help=f"comma-separated laws ({', '.join(LAWS)}; default fbl,robust)")
+    mc.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")
+    mc.add_argument("--rate", type=_positive(), help="sampled-data controller rate [Hz] (default: continuous)")
+    _campaign_args(mc, "out/montecarlo")
+
+    sw = sub.add_parser("sweep", help="eps trade-off (sweep eps) or sample-rate stability map (sweep rate)")
+    swsub = sw.add_subparsers(dest="what", required=True, parser_class=_Parser)
+    se = swsub.add_parser("eps", help="final error bound vs chattering over eps; Pareto plot")
+    se.add_argument("--eps", type=_positive(), nargs="+", default=[0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0],
+                    help="eps values (default 0.01 ... 2)")
+    se.add_argument("--rates", type=_positive(), nargs="*", default=[100000.0],
+                    help="sampled rates [Hz] besides continuous time (default 100000)")
+    _campaign_args(se, "out/sweep-eps", plants=True)
+    sr = swsub.add_parser("rate", help="stable / chattering / clean over eps x rate (x K); stability map")
+    sr.add_argument("--eps", type=_positive(), nargs="+", default=[0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0],
+                    help="eps values (default 0.05 ... 10)")
+    sr.add_argument("--rates", type=_positive(), nargs="+",
+                    default=[500.0, 1000.0, 2000.0, 5000.0, 10000.0, 20000.0, 50000.0, 100000.0],
+                    help="controller rates [Hz] (default 0.5 ... 100 kHz)")
+    sr.add_argument("--K", type=_positive(), nargs="+", help="robust gains K to compare (default: the law's)")
+    _campaign_args(sr, "out/sweep-rate", plants=True)
 
     be = sub.add_parser("bench", help="closed form vs Pinocchio and simulation timings")
     be.add_argument("--json", action="store_true", help="one JSON object on stdout")
@@ -142,7 +190,8 @@ _COMMANDS = {
     "bounds": ("bounds", "cmd_bounds"),
     "run": ("run", "cmd_run"),
     "paper": ("run", "cmd_paper"),
-    "sweep-eps": ("run", "cmd_sweep_eps"),
+    "montecarlo": ("study", "cmd_montecarlo"),
+    "sweep": ("study", "cmd_sweep"),
     "bench": ("bench", "cmd_bench"),
 }
 
@@ -152,9 +201,19 @@ def _dispatch(args) -> int:
     return getattr(importlib.import_module(f".{module}", __package__), func)(args)
 
 
+def _sigterm(signum, frame):
+    raise KeyboardInterrupt("SIGTERM")
+
+
 def main(argv=None) -> int:
-    """Run the command line ``argv`` (default ``sys.argv[1:]``); return the exit code."""
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); return the exit code.
+
+    SIGTERM is handled as Ctrl-C (``KeyboardInterrupt``) while the command runs.
+    """
     os.environ.setdefault("MPLBACKEND", "Agg")
+    old = None
+    if threading.current_thread() is threading.main_thread():
+        old = signal.signal(signal.SIGTERM, _sigterm)
     try:
         args = build_parser().parse_args(argv)
         return int(_dispatch(args) or 0)
@@ -173,6 +232,9 @@ def main(argv=None) -> int:
         print(f"rc3r: internal error: {type(exc).__name__}: {exc} (set RC3R_DEBUG=1 for a traceback)",
               file=sys.stderr)
         return EXIT["internal_error"]
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
 
 
 def entry() -> None:  # console script

@@ -1,4 +1,4 @@
-"""``rc3r run``, ``rc3r paper``, ``rc3r sweep-eps``: simulations, their files and figures.
+"""``rc3r run``, ``rc3r paper``: simulations, their files and figures.
 
 Every output file is written atomically (:mod:`rc3r.io`); progress goes to stderr.
 """
@@ -8,7 +8,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 
 from ..errors import DivergenceError
 from ..io import atomic_write_json, atomic_write_text, read_toml
@@ -17,7 +16,7 @@ from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
 from ..study import build_run, execute
 from . import EXIT
-from ._output import output_dir
+from ._output import check_output_path, output_dir
 
 
 def _progress(msg: str) -> None:
@@ -34,6 +33,7 @@ def cmd_run(args) -> int:
     A diverged run writes its data up to the divergence, then raises
     :class:`~rc3r.errors.DivergenceError` (exit 3).
     """
+    check_output_path(args.out)  # before anything is announced or simulated
     cfg = {} if args.config is None else read_toml(args.config, "config file")
     spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
                      eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
@@ -46,6 +46,10 @@ def cmd_run(args) -> int:
         res, m = execute(spec)
         m["provenance"] = provenance(config=cfg, seed=spec.seed)
         res.save(tmp, m, spec.name)
+    if res.status == "interrupted":
+        print(f"rc3r: {spec.name} {res.message}: written to {out}/ (metrics.json status 'interrupted')",
+              file=sys.stderr)
+        return EXIT["interrupted"]
     print(f"{spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, final bound = {_fmt3(m['final_error_bound'])} rad, "
           f"chattering = {_fmt3(m['chattering'])} N m/s, wall {m['wall_time_s']:.2f} s -> {out}/")
     try:
@@ -84,6 +88,8 @@ def _paper(paper, out: Path) -> int:
         for k, spec in enumerate(specs, 1):
             _progress(f"[{mode} {k}/{len(specs)}] {spec.name} ...")
             res, m = execute(spec)
+            if res.status == "interrupted":
+                raise KeyboardInterrupt
             _progress(f"    {res.message}; max|e| = {_fmt3(m['max_abs_error'])} rad, wall {m['wall_time_s']:.2f} s")
             sub = out / mode / spec.name
             res.save(sub, m, spec.name)
@@ -106,36 +112,3 @@ def _paper(paper, out: Path) -> int:
     atomic_write_text(out / "summary.md", "\n".join(md))
     print("\n".join(md))
     return EXIT["ok"]
-
-
-def cmd_sweep_eps(args) -> int:
-    """``rc3r sweep-eps``: robust-perturbed over eps, continuous and sampled; trade-off plot."""
-    paper = robot_class(DEFAULT_ROBOT).paper_study()
-    eps_values = args.eps or list(np.round(np.logspace(-2, 0.5, 8), 4))
-    with output_dir(args.out) as tmp:
-        _sweep(paper, eps_values, args.duration, tmp)
-    print(f"wrote {args.out}/sweep.json and {args.out}/tradeoff.png")
-    return EXIT["ok"]
-
-
-def _sweep(paper, eps_values, duration, out: Path) -> None:
-    from ..plotting import plot_tradeoff
-
-    rows = []
-    n = 2 * len(eps_values)
-    k = 0
-    for mode, rate in (("continuous", None), ("sampled", paper.PAPER_SAMPLED_RATE)):
-        for e in eps_values:
-            k += 1
-            spec = build_run(controller="robust", perturbed=True, eps=float(e), rate=rate,
-                             duration=duration, name=f"robust-perturbed-eps{e:g}",
-                             config={"controller": dict(paper.PAPER_GAINS["robust"])})
-            res, m = execute(spec)
-            m["eps"] = float(e)
-            m["mode_label"] = mode if rate is None else f"sampled {rate / 1000:g} kHz"
-            rows.append(m)
-            _progress(f"[{k}/{n}] {m['mode_label']} eps = {e:g}: {res.message}, final bound "
-                      f"{max(m['final_error_bound']):.3g} rad, chattering {sum(m['chattering']):.4g} N m/s")
-    atomic_write_json(out / "sweep.json", {"runs": rows, "chattering_definition": CHATTERING_DEFINITION,
-                                           "provenance": provenance()})
-    plot_tradeoff(rows, out / "tradeoff.png", "robust law, perturbed: eps trade-off")
