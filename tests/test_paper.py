@@ -1,4 +1,4 @@
-"""rc3r.robots.rr3.paper and `rc3r run` / `rc3r paper` / `rc3r sweep-eps` in-process: outputs, claims, bad input."""
+"""rc3r.robots.rr3.paper and `rc3r run` / `rc3r paper` / `rc3r sweep eps` in-process: outputs, claims, bad input."""
 from __future__ import annotations
 
 import json
@@ -130,6 +130,8 @@ def test_paper_claims_sampled_chattering():
 
 def test_sweep_eps_writes_plot(tmp_path, capsys):
     out = tmp_path / "sw"
-    assert main(["sweep-eps", "--eps", "0.5", "0.1", "--duration", "0.5", "--out", str(out)]) == 0
+    assert main(["sweep", "eps", "--eps", "0.5", "0.1", "--duration", "0.5", "--workers", "1",
+                 "--out", str(out)]) == 0
     data = json.loads((out / "sweep.json").read_text())
-    assert len(data["runs"]) == 4 and (out / "tradeoff.png").exists()
+    assert len(data["summary"]) == 4 and (out / "pareto.png").exists()
+    assert {(s["rate_hz"], s["eps"]) for s in data["summary"]} == {(None, 0.1), (None, 0.5), (1e5, 0.1), (1e5, 0.5)}

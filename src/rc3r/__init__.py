@@ -25,12 +25,14 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.rr3.engine``         the compiled closed-loop simulator
 ``rc3r.robots.rr3.paper``          the paper's box, gains, trajectory, scenarios, claims
 ``rc3r.robots.rr3.bench``          closed form vs Pinocchio, simulation timings
+``rc3r.robots.rr3.bench_integrators``  Rosenbrock vs SciPy Radau/BDF on the same compiled loop
 ``rc3r.robots.pinocchio``          :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
 ``rc3r.robots.base_parameters``    numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``   compiled Slotine--Li regressor of a serial chain
 ``rc3r.robots.pinocchio_bench``    ``rc3r bench``'s generic-robot section (UR5, Panda)
 ``rc3r.controllers``               control laws u = Y theta_eff + w and their registry
 ``rc3r.controllers._kernels``      compiled kernels of the built-in laws (generic over n, p)
+``rc3r.controllers.guarantee``     the robust laws' ultimate bound on |e_j| (Spong's UUB made explicit)
 ``rc3r.trajectory``                desired trajectories (sines, quintic), compiled evaluation
 ``rc3r.uncertainty``               parameter uncertainty (re-exports the three below)
 ``rc3r.uncertainty.box``           boxes on standard parameters, box files, perturbed plants
@@ -44,6 +46,12 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.status``           status codes and the compiled bound check
 ``rc3r.simulate.export``           a result as a table, CSV, figure, run directory
 ``rc3r.study``                     a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
+``rc3r.campaign``                  many runs: Monte Carlo over the box, eps sweep, rate map
+``rc3r.campaign.jobs``             :class:`Job` (one run, picklable) and :func:`run_job` (its row)
+``rc3r.campaign.runner``           resumable row-by-row table, local process pool or Dask
+``rc3r.campaign.studies``          the campaigns' jobs, summaries, chattering classification
+``rc3r.campaign.figures``          the campaigns' figures
+``rc3r.campaign.bench``            campaign throughput with 1 and 2 workers (``rc3r bench``)
 ``rc3r.verify``                    checks of a robot against Pinocchio
 ``rc3r.plotting``                  figures (never switches the matplotlib backend)
 ``rc3r.io``                        atomic file output (user's umask), TOML reading
@@ -52,7 +60,8 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.cli``                       the command line: the only place that parses, prints, exits
 ``rc3r.cli.model``                 ``verify-model``, ``make-urdf``
 ``rc3r.cli.bounds``                ``bounds``
-``rc3r.cli.run``                   ``run``, ``paper``, ``sweep-eps``
+``rc3r.cli.run``                   ``run``, ``paper``
+``rc3r.cli.study``                 ``montecarlo``, ``sweep eps``, ``sweep rate``
 ``rc3r.cli.bench``                 ``bench``
 ``rc3r.cli._output``               output directories written as a whole, locked
 =================================  ==============================================================

@@ -101,12 +101,41 @@ def render_text(r: dict) -> str:
     else:
         lines.append(f"Peak memory of `rc3r paper`: {mem['peak_rss_mib']:.0f} MiB resident "
                      f"(wall {_si(mem['wall_s'])}, exit {mem['returncode']}).")
+    if "integrators" in r:
+        lines += ["", _render_integrators(r["integrators"])]
     if "generic" in r:
         lines += ["", _render_generic(r["generic"])]
+    if "throughput" in r:
+        lines += ["", _render_throughput(r["throughput"])]
     lines.append("")
     lines.append(f"Correctness: {'all checks pass' if r['checks_ok'] else 'SOME CHECKS FAIL'}. "
                  f"Benchmark wall time {_si(r['total_wall_s'])}.")
     return "\n".join(lines)
+
+
+def _render_integrators(g: dict) -> str:
+    """Rosenbrock vs SciPy on the same compiled right-hand side."""
+    lines = ["Integrators on the same compiled closed loop (rtol 1e-6, atol 1e-8; 'q diff' = max |q - q_yardstick|, "
+             "yardstick SciPy Radau rtol 1e-10):"]
+    rows = []
+    for run, x in g.items():
+        for label, m in x["methods"].items():
+            rows.append([run, label, _si(m["wall_s"]), f"{m['x_default']:.3g}x", str(m["rhs_evals"]),
+                         f"{m['max_q_diff_rad']:.2g}", "ok" if m["ok"] else "FAILED"])
+    return "\n".join(lines + [_table(["run", "method", "wall", "vs default", "rhs evals", "q diff [rad]", ""],
+                                     rows, {2, 3, 4, 5})])
+
+
+def _render_throughput(t: dict) -> str:
+    """Campaign runs per minute with 1 and 2 workers."""
+    rows = [[str(k), str(v["runs"]), _si(v["wall_s"]), f"{v['runs_per_min']:.0f}"] for k, v in t["workers"].items()]
+    tg = t["target"]
+    tail = [f"2 vs 1 worker(s): {t['speedup_2_vs_1']:.2f}x" if "speedup_2_vs_1" in t else "",
+            f"target >= {tg['runs_per_min']:.0f} runs/min of 10 s: {tg['measured']:.0f} -> "
+            f"{'met' if tg['met'] else 'NOT MET'} {tg['note']}".rstrip()]
+    return "\n".join([f"Campaign throughput: rc3r montecarlo jobs, {'/'.join(t['controllers'])} on {t['n_plants']} "
+                      f"plants, {t['duration_s']:g} s each (pool start and fsynced rows included):",
+                      _table(["workers", "runs", "wall", "runs/min"], rows, {1, 2, 3})] + [x for x in tail if x])
 
 
 def _render_generic(g: dict) -> str:
@@ -152,6 +181,10 @@ def cmd_bench(args) -> int:
     from ..robots.pinocchio_bench import bench_generic
 
     r["generic"] = bench_generic(quick=quick, progress=_progress)
+    from ..campaign.bench import bench_throughput
+
+    r["throughput"] = bench_throughput(n_plants=2 if quick else 100, duration=0.5 if quick else 10.0,
+                                       progress=_progress)
     if getattr(args, "json", False):
         print(json.dumps(_jsonable(r), indent=2))
     else:

@@ -522,6 +522,8 @@ def run_bench(quick: bool = False, progress=None) -> dict:
         out["reference_speedup"] = {"fast_wall_s": f["wall_s"], "reference_wall_s": r["wall_s"],
                                     "speedup": r["wall_s"] / f["wall_s"] if f["wall_s"] > 0 else None}
     out["targets"] = _targets(ops, out["sims"], duration)
+    from .bench_integrators import bench_integrators
+    out["integrators"] = bench_integrators(duration, progress=_progress)
     skip = {"skipped": "quick mode"}
     out["compile"] = skip if quick else bench_compile()
     out["memory"] = skip if quick else bench_memory()

@@ -1,0 +1,92 @@
+"""Integrators side by side on the same compiled closed loop (part of ``rc3r bench``).
+
+The 3R's continuous-time simulator is a hand-written Rosenbrock method
+(:mod:`.engine`). This section makes it justify itself against library solvers on
+the *same* compiled right-hand side (:func:`.engine.closed_loop_rhs`: closed-form plant,
+law kernel, trajectory) and the same tolerances (``rtol = 1e-6``, ``atol = 1e-8``):
+
+* ``rosenbrock, J every step`` -- MATLAB's ode23s scheme (``jac_reuse = 1``);
+* ``rosenbrock, J kept 5 steps`` -- the default (``jac_reuse = 5``);
+* ``scipy Radau`` / ``scipy BDF`` -- :func:`scipy.integrate.solve_ivp` calling the
+  compiled right-hand side (finite-difference Jacobian by SciPy), stored on the same
+  1 kHz grid (``t_eval``) with ``max_step`` = 1 ms like the Rosenbrock runs.
+
+Each row: wall time of the integration, right-hand-side evaluations, and the largest
+joint-position difference from ``scipy Radau`` at ``rtol = 1e-10`` (the yardstick).
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from numba import njit
+from scipy.integrate import solve_ivp
+
+from . import engine as E
+
+__all__ = ["bench_integrators"]
+
+
+@njit(cache=True)
+def _rhs(t, x, thp, law, cp, tp, l2, g0):
+    n = x.shape[0]
+    xdot = np.empty(n)
+    u = np.empty(3); ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
+    w33 = np.empty((3, 3)); w3 = np.empty(3)
+    v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3)
+    E.closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w)
+    return xdot
+
+
+def _scipy(spec, x0, t_out, method: str, rtol: float, atol: float):
+    p = spec.plant
+    cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
+    l2, g0 = p.params.lengths[1], p.params.g0
+    args = (p.theta, code, cp, tp, l2, g0)
+    _rhs(0.0, x0, *args)  # compile / load before timing
+    t0 = time.perf_counter()
+    sol = solve_ivp(_rhs, (t_out[0], t_out[-1]), x0, method=method, t_eval=t_out, rtol=rtol, atol=atol,
+                    max_step=t_out[1] - t_out[0], args=args)
+    wall = time.perf_counter() - t0
+    return sol.y.T[:, :3], wall, int(sol.nfev), sol.status == 0
+
+
+def _rosenbrock(spec, jac_reuse: int):
+    from dataclasses import replace
+
+    from ...simulate import simulate
+
+    opts = replace(spec.options, jac_reuse=jac_reuse, engine="fast")
+    simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01))  # warm
+    res = simulate(spec.plant, spec.law, spec.trajectory, opts)
+    return res.q, res.wall_time_s, res.rhs_evals, res.ok
+
+
+def bench_integrators(duration: float = 10.0, progress=None) -> dict:
+    """Rosenbrock (J every step / kept 5 steps) vs SciPy Radau and BDF on the FBL and robust perturbed runs."""
+    from ...simulate import _initial_state
+    from ...study import build_run
+
+    report = progress or (lambda msg: None)
+    out = {}
+    for ctrl in ("fbl", "robust"):
+        spec = build_run(controller=ctrl, perturbed=True, duration=duration)
+        x0 = _initial_state(3, spec.law, spec.trajectory, None)
+        t_out = np.linspace(0.0, duration, int(round(duration * spec.options.output_rate)) + 1)
+        report(f"integrators: {ctrl}-perturbed {duration:g} s, yardstick scipy Radau rtol 1e-10 ...")
+        ref_q, ref_wall, _, _ = _scipy(spec, x0, t_out, "Radau", 1e-10, 1e-12)
+        rows = {}
+        for label, run in (("rosenbrock, J every step", lambda: _rosenbrock(spec, 1)),
+                           ("rosenbrock, J kept 5 steps", lambda: _rosenbrock(spec, 5)),
+                           ("scipy Radau", lambda: _scipy(spec, x0, t_out, "Radau", 1e-6, 1e-8)),
+                           ("scipy BDF", lambda: _scipy(spec, x0, t_out, "BDF", 1e-6, 1e-8))):
+            report(f"integrators: {ctrl}, {label} ...")
+            q, wall, nfev, ok = run()
+            m = min(len(q), len(ref_q))
+            rows[label] = {"wall_s": wall, "rhs_evals": nfev, "ok": bool(ok),
+                           "max_q_diff_rad": float(np.abs(q[:m] - ref_q[:m]).max())}
+        base = rows["rosenbrock, J kept 5 steps"]["wall_s"]
+        for r in rows.values():
+            r["x_default"] = r["wall_s"] / base if base > 0 else None
+        out[f"{ctrl}-perturbed"] = {"duration_s": duration, "yardstick_wall_s": ref_wall, "methods": rows}
+    return out
