@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -80,6 +81,10 @@ def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
     return Path(path)
 
 
+#: Largest TOML file read (config, parameter and box files are a few kB).
+MAX_TEXT_BYTES = 1 << 20
+
+
 def read_toml(path: str | Path, what: str) -> dict:
     """Parse the TOML file ``path``; one-line :class:`ConfigError` naming ``what`` otherwise.
 
@@ -87,13 +92,23 @@ def read_toml(path: str | Path, what: str) -> dict:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        st = path.stat()
+        if stat.S_ISDIR(st.st_mode):
+            raise IsADirectoryError
+        if not stat.S_ISREG(st.st_mode):  # /dev/zero, a FIFO ...: would be read forever
+            raise ConfigError(f"{what} {path} is not a regular file")
+        if st.st_size > MAX_TEXT_BYTES:
+            raise ConfigError(f"{what} {path} is {st.st_size} bytes (at most {MAX_TEXT_BYTES}): not a config")
+        with open(path, "rb") as f:
+            text = f.read(MAX_TEXT_BYTES + 1).decode()
     except FileNotFoundError:
         raise ConfigError(f"{what} not found: {path}") from None
     except IsADirectoryError:
         raise ConfigError(f"{what} path is a directory: {path}") from None
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{path}: not a text file: {exc}") from None
+    except OSError as exc:  # unreadable, name too long, a loop of links ...
+        raise ConfigError(f"{what} {path}: {exc.strerror or exc}") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

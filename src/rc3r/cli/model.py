@@ -4,7 +4,9 @@ from __future__ import annotations
 import json
 import math
 
-from ..errors import ConfigError
+import numpy as np
+
+from ..errors import ConfigError, ParameterError
 from ..robots import DEFAULT_ROBOT, load_robot, load_urdf_robot, robot_class
 from ..verify import VerifyReport, verify_model
 from . import EXIT
@@ -73,6 +75,27 @@ def render_text(report: VerifyReport) -> str:
     return "\n".join(lines)
 
 
+#: Largest |standard parameter| verify-model accepts: beyond it the identities Y theta = tau
+#: cannot be checked in double precision (a 1e300 inertia overflows the products).
+MAX_PARAMETER = 1e12
+
+
+def _require_checkable(robot, urdf) -> None:
+    """A non-physical robot is bad input (exit 2), not a failed check: mass <= 0, an inertia that is
+    not positive definite, or parameters too large to check."""
+    where = f"URDF {urdf}" if urdf else f"robot {robot.label!r}"
+    try:
+        robot.require_simulable()
+    except ParameterError as exc:
+        raise ParameterError(f"{where} is not a physical robot: {exc}") from None
+    std = np.asarray(robot.standard_parameters(), dtype=float)
+    big = np.flatnonzero(~(np.abs(std) <= MAX_PARAMETER))
+    if big.size:
+        name = robot.standard_parameter_names[big[0]]
+        raise ParameterError(f"{where}: parameter {name} = {std[big[0]]:g} is beyond {MAX_PARAMETER:g} "
+                             "(SI units): not a robot the model can be checked on")
+
+
 def cmd_verify_model(args) -> int:
     """Print the report (text or one JSON object); exit 0 iff every check passes, else 1."""
     if args.generic:
@@ -83,6 +106,7 @@ def cmd_verify_model(args) -> int:
         robot = load_robot(args.robot, urdf=args.urdf)
     else:
         robot = robot_class(DEFAULT_ROBOT).from_urdf(args.urdf)
+    _require_checkable(robot, args.urdf)
     report = verify_model(robot, samples=args.samples, seed=args.seed)
     if args.json:
         out = report_to_dict(report)

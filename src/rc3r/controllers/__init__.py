@@ -61,6 +61,10 @@ __all__ = [
 
 
 def _array(name, x, size=None) -> np.ndarray:
+    items = x if isinstance(x, (list, tuple)) else [x]
+    if any(isinstance(v, (bool, np.bool_, str)) for v in items) or \
+            (isinstance(x, np.ndarray) and x.dtype.kind in "bUS"):  # True is not a gain of 1
+        raise ParameterError(f"{name} must be numbers, got {x!r}")
     try:
         arr = np.array(x, dtype=float)
     except (TypeError, ValueError):

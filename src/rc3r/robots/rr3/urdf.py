@@ -247,6 +247,10 @@ _NUMERIC = {
 }
 
 
+#: Elements whose every numeric attribute must be present.
+_REQUIRED = ("mass", "inertia")
+
+
 def _check_numbers(root: ET.Element, path: Path) -> None:
     """Every number rc3r reads must parse and be finite (urdfdom would drop a NaN silently)."""
     for parent in root.iter():
@@ -254,14 +258,16 @@ def _check_numbers(root: ET.Element, path: Path) -> None:
         for el in parent:
             for attr in _NUMERIC.get(el.tag, ()):
                 text = el.get(attr)
+                where = f"{parent.tag} '{owner}'" if owner else parent.tag
                 if text is None:
+                    if el.tag in _REQUIRED:  # urdfdom would read a missing inertia entry as 0
+                        raise UrdfError(f"malformed URDF {path}: {where} <{el.tag}> has no {attr}=\"...\"")
                     continue
                 try:
                     ok = all(math.isfinite(float(x)) for x in text.split())
                 except ValueError:
                     ok = False
                 if not ok:
-                    where = f"{parent.tag} '{owner}'" if owner else parent.tag
                     raise UrdfError(f"malformed URDF {path}: {where} <{el.tag} {attr}=\"{text}\"> "
                                     "is not a finite number")
 
