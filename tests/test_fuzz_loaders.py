@@ -1,0 +1,138 @@
+"""Hypothesis fuzzing of the file loaders: random mutations of valid files get only clean refusals.
+
+Each mutation of the committed URDF, of the parameter and box TOML files, and of a run
+configuration is loaded the way the command line loads it. The property: the loader
+returns a robot / a box / a run specification, or raises :class:`rc3r.errors.Rc3rError`
+(the one-line ``rc3r: error:`` of the command line); never any other exception (a
+traceback for a user). Examples are derandomized, so a failure reproduces.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
+
+from rc3r.errors import Rc3rError
+from rc3r.io import read_toml
+from rc3r.robots import load_urdf_robot, robot_class
+from rc3r.study import build_run
+from rc3r.uncertainty import load_box
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "src" / "rc3r" / "robots" / "rr3" / "data"
+URDF = (ROOT / "urdf" / "rr3.urdf").read_text()
+PARAMS = (DATA / "rr3.toml").read_text()
+BOX = (DATA / "paper_box.toml").read_text()
+CONFIG = """seed = 3
+perturbed = true
+[controller]
+kind = "robust"
+K = [100.0, 100.0, 100.0]
+Lambda = 50.0
+eps = 0.5
+[model]
+theta = "paper"
+rho = "certified"
+[simulation]
+duration = 0.2
+rate = 1000.0
+jac_reuse = 5
+[trajectory]
+kind = "paper"
+"""
+
+FUZZ = settings(max_examples=60, deadline=None, derandomize=True, database=None,
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+
+# pieces a mutation inserts: markup, numbers that break physics or parsing, TOML syntax
+PIECES = st.sampled_from(['<', '>', '"', '/>', '</link>', '<inertia/>', '=', ' ', '\n', 'nan', 'inf', '-1',
+                          '1e308', '-0', '0', '1e-320', 'true', '[', ']', '[[link]]', '{', '"x"', '#', "'",
+                          '= [1, 0]', 'mass', 'ixx="-1"', 'type="prismatic"', '\x00', 'é'])
+
+
+@st.composite
+def mutated(draw, text: str):
+    """``text`` with 1-3 edits: delete a slice, insert a piece, duplicate a slice, replace a number."""
+    for _ in range(draw(st.integers(1, 3))):
+        n = len(text)
+        i = draw(st.integers(0, max(n - 1, 0)))
+        j = min(n, i + draw(st.integers(0, 40)))
+        kind = draw(st.sampled_from(["delete", "insert", "duplicate", "replace"]))
+        if kind == "delete":
+            text = text[:i] + text[j:]
+        elif kind == "insert":
+            text = text[:i] + draw(PIECES) + text[i:]
+        elif kind == "duplicate":
+            text = text[:j] + text[i:j] + text[j:]
+        else:
+            text = text[:i] + draw(PIECES) + text[j:]
+    return text
+
+
+def _clean(load) -> None:
+    try:
+        load()
+    except Rc3rError as exc:
+        event(f"refused: {type(exc).__name__}")  # a clean refusal
+    else:
+        event("loaded")
+
+
+@FUZZ
+@given(text=mutated(URDF))
+def test_mutated_urdf_is_loaded_or_refused_cleanly_by_the_closed_form_loader(tmp_path_factory, text):
+    path = tmp_path_factory.mktemp("u") / "arm.urdf"
+    path.write_text(text, errors="surrogatepass")
+    _clean(lambda: robot_class().from_urdf(path))
+
+
+@FUZZ
+@given(text=mutated(URDF))
+def test_mutated_urdf_is_loaded_or_refused_cleanly_by_the_generic_loader(tmp_path_factory, text):
+    path = tmp_path_factory.mktemp("g") / "arm.urdf"
+    path.write_text(text, errors="surrogatepass")
+    _clean(lambda: load_urdf_robot(path))
+
+
+@FUZZ
+@given(text=mutated(PARAMS))
+def test_mutated_parameter_file_is_loaded_or_refused_cleanly(tmp_path_factory, text):
+    d = tmp_path_factory.mktemp("p")
+    (d / "p.toml").write_text(text, errors="surrogatepass")
+    _clean(lambda: robot_class().make_urdf(d / "p.toml", d / "out.urdf"))
+
+
+@FUZZ
+@given(text=mutated(BOX))
+def test_mutated_box_file_is_loaded_or_refused_cleanly(tmp_path_factory, text):
+    path = tmp_path_factory.mktemp("b") / "box.toml"
+    path.write_text(text, errors="surrogatepass")
+    names = robot_class().nominal().standard_parameter_names
+    _clean(lambda: load_box(path, names))
+
+
+@FUZZ
+@given(text=mutated(CONFIG))
+def test_mutated_run_config_is_built_or_refused_cleanly(tmp_path_factory, text):
+    path = tmp_path_factory.mktemp("c") / "run.toml"
+    path.write_text(text, errors="surrogatepass")
+    _clean(lambda: build_run(config=read_toml(path, "config file")))
+
+
+def test_the_unmutated_files_load():
+    """The fuzzers start from files that load: a refusal above is the mutation's doing."""
+    assert robot_class().from_urdf(ROOT / "urdf" / "rr3.urdf").n == 3
+    assert build_run(config=__import__("tomllib" if __import__("sys").version_info >= (3, 11) else "tomli")
+                     .loads(CONFIG)).options.rate == 1000.0
+
+
+@pytest.mark.parametrize("text", ["", "\x00", "<robot>", '<robot name="x"/>', "<?xml version='1.0'?>"])
+def test_degenerate_urdfs(tmp_path, text):
+    path = tmp_path / "x.urdf"
+    path.write_text(text)
+    with pytest.raises(Rc3rError):
+        robot_class().from_urdf(path)
+    with pytest.raises(Rc3rError):
+        load_urdf_robot(path)
