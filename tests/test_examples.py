@@ -42,3 +42,13 @@ def test_ur5_gains_in_the_config_are_the_scripts():
     k = [float(x) for x in re.search(r"K = \[(.*)\]", printed).group(1).split(",")]
     cfg = read_toml(EXAMPLES / "ur5_payload.toml", "config")
     assert cfg["gains"]["robust"]["K"] == k
+
+
+def test_montecarlo_example_robust_beats_fbl_and_resumes(tmp_path):
+    """examples/montecarlo.py (4 plants, 1 s): robust median max|e| < FBL's / 10; a second run resumes (0 new)."""
+    out = _run("montecarlo", "4", "1.0", f"--out={tmp_path / 'mc'}")
+    med = {law: float(re.search(rf"{law}: .*median max\|e\| = ([0-9.e+-]+) rad", out).group(1))
+           for law in ("fbl", "robust")}
+    assert med["robust"] < 0.1 * med["fbl"]
+    again = _run("montecarlo", "4", "1.0", f"--out={tmp_path / 'mc'}")
+    assert "(0 new)" in again and (tmp_path / "mc" / "error_vs_distance.png").stat().st_size > 0
