@@ -58,7 +58,9 @@ def test_directory_replaced_as_a_whole_and_interrupt_keeps_the_old_one(tmp_path,
     out = tmp_path / "r"
     assert main(RUN + ["--out", str(out)]) == 0
     (out / "stale-from-an-older-run.txt").write_text("x")
-    assert main(RUN + ["--controller", "pd", "--out", str(out)]) == 0
+    assert main(RUN + ["--controller", "pd", "--out", str(out)]) == 2  # an earlier result: not without --force
+    assert "--force" in _err(capsys)
+    assert main(RUN + ["--controller", "pd", "--out", str(out), "--force"]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "run.png", "timeseries.csv"]
     before = {p.name: p.read_bytes() for p in out.iterdir()}
 
@@ -66,7 +68,7 @@ def test_directory_replaced_as_a_whole_and_interrupt_keeps_the_old_one(tmp_path,
         raise KeyboardInterrupt
 
     monkeypatch.setattr(cli_run, "execute", interrupted)
-    assert main(RUN + ["--out", str(out)]) == 130
+    assert main(RUN + ["--out", str(out), "--force"]) == 130
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]  # no .tmp-, .old- or .lock left
 
@@ -114,3 +116,15 @@ def test_out_never_replaces_a_directory_rc3r_did_not_write(tmp_path, monkeypatch
     assert (work / "source.py").read_text() == "keep me"
     assert (tmp_path / "notes" / "todo.txt").read_text() == "keep me too"
     assert (tmp_path / "repo" / ".git").is_dir()
+
+
+def test_default_out_is_out_run_name_and_is_not_overwritten(tmp_path, monkeypatch, capsys):
+    """Without --out, `rc3r run` writes out/run/<name>; a second run of the same name is refused."""
+    monkeypatch.chdir(tmp_path)
+    assert main(RUN) == 0
+    assert (tmp_path / "out" / "run" / "fbl-ideal" / "metrics.json").exists()
+    assert main(RUN + ["--perturbed"]) == 0
+    assert (tmp_path / "out" / "run" / "fbl-perturbed" / "metrics.json").exists()
+    capsys.readouterr()
+    assert main(RUN) == 2 and "--force" in _err(capsys)
+    assert main(RUN + ["--force"]) == 0

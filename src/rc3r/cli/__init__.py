@@ -146,7 +146,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--duration", type=_positive(), help="simulated time [s] (default 10)")
     r.add_argument("--config", help="TOML with gains, trajectory, plant, bounds (docs/control.md)")
     r.add_argument("--engine", choices=ENGINES, help="simulator (default auto: fast when compiled, else python)")
-    r.add_argument("--out", default="out/run", help="output directory (default out/run)")
+    r.add_argument("--out", help="output directory (default out/run/<name>, e.g. out/run/robust-perturbed)")
+    r.add_argument("--force", action="store_true", help="replace an earlier result in --out")
 
     pa = sub.add_parser("paper", help="the five scenarios of section 4, figures and summary")
     pa.add_argument("--out", default="out/paper", help="output directory (default out/paper)")

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 
-from ..errors import DivergenceError
+from ..errors import ConfigError, DivergenceError
 from ..io import atomic_write_json, atomic_write_text, read_toml
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate.metrics import CHATTERING_DEFINITION
@@ -33,15 +33,19 @@ def cmd_run(args) -> int:
     A diverged run writes its data up to the divergence, then raises
     :class:`~rc3r.errors.DivergenceError` (exit 3).
     """
-    check_output_path(args.out)  # before anything is announced or simulated
+    if args.out is not None:
+        check_output_path(args.out)  # before anything is announced or simulated
     cfg = {} if args.config is None else read_toml(args.config, "config file")
     spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
                      eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
                      payload=args.payload, payload_com=args.payload_com, config=cfg)
+    out = Path(args.out if args.out is not None else Path("out") / "run" / spec.name)
+    check_output_path(out)
+    if out.is_dir() and any(out.iterdir()) and not args.force:
+        raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     _progress(f"rc3r run: {spec.name} on plant '{spec.plant.label}', {spec.options.mode}"
               f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
               f"{spec.options.duration:g} s, engine {spec.options.engine} ...")
-    out = Path(args.out)
     with output_dir(out) as tmp:  # --out checked and locked before simulating
         res, m = execute(spec)
         m["provenance"] = provenance(config=cfg, seed=spec.seed)
