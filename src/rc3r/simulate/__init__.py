@@ -11,7 +11,8 @@ Three **engines**:
 
 * ``fast`` -- the robot's compiled simulator (:attr:`Robot.fast_engine`; the paper's
   arm has one: closed-form plant on the plant's theta, Rosenbrock ode23s for
-  continuous mode, RK4 with ``nsub`` sub-steps per period for sampled mode, see
+  continuous mode (steps of at most 1 ms, not clipped to the output grid: stored rows
+  are interpolated inside the steps), RK4 with ``nsub`` sub-steps per period for sampled mode, see
   :mod:`rc3r.robots.rr3.engine`). Needs a law with a compiled kernel.
 * ``python`` -- any robot, any law (also a user's law written in Python): the
   robot's own forward dynamics (Pinocchio ABA), SciPy ``Radau`` at ``rtol``/``atol``

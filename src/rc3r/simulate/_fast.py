@@ -16,6 +16,9 @@ from . import status as S
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
 
+#: Largest continuous-time step [s]; the stored rows are interpolated inside the steps.
+HMAX = 0.001
+
 
 def run(plant, law, trajectory, opt, x0):
     eng = plant.fast_engine
@@ -28,7 +31,7 @@ def run(plant, law, trajectory, opt, x0):
         t_out = np.linspace(0.0, opt.duration, nout)
         X = np.zeros((nout, size)); U = np.zeros((nout, n)); R = np.zeros((nout, n)); yn = np.zeros(nout)
         X[0] = x0
-        hmax = 1.0 / opt.output_rate
+        hmax = HMAX
         per = max(1, int(round(CHUNK_S * opt.output_rate)))
         start, stored, st, t_end, counts = 0, 0, S.OK, 0.0, np.zeros(3, dtype=np.int64)
         try:

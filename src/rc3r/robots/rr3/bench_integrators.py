@@ -33,8 +33,8 @@ def _rhs(t, x, thp, law, cp, tp, l2, g0):
     xdot = np.empty(n)
     u = np.empty(3); ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
     w33 = np.empty((3, 3)); w3 = np.empty(3)
-    v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3)
-    E.closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w)
+    v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3); ys = np.empty(1)
+    E.closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
     return xdot
 
 

@@ -9,7 +9,8 @@ controller state ``z`` (the adaptive law's theta estimate; empty otherwise).
   "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18 (1997) (MATLAB's ode23s): order 2
   step, order 3 error estimate, Jacobian by forward differences, kept for
   ``jac_reuse`` accepted steps (refreshed after a rejection; 1 = every step as ode23s).
-  Steps are clipped to hit every output time exactly.
+  Steps are not clipped to the output times: the stored rows are the cubic Hermite
+  interpolant of the two ends of the step that contains them (third order, like the step).
 * :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and
   held (zero-order hold); the plant is integrated over each period by classical RK4
   with ``nsub`` sub-steps; the controller state is updated by forward Euler.
@@ -45,10 +46,10 @@ def control(law, cp, q, qd, z, ref, l2, g0, u, zdot, Y, th_eff, v, a, r, w):
 
 
 @njit(**_JIT)
-def closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w):
-    """xdot = f(t, x); fills ``u``. Returns False if the plant M is not PD."""
+def closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w, ys):
+    """xdot = f(t, x); fills ``u`` and ``ys[0] = ||Y^T r||``. Returns False if the plant M is not PD."""
     reference_into(tp, t, ref)
-    control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, xdot[6:], Y, xi, v, a, r, w)
+    ys[0] = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, xdot[6:], Y, xi, v, a, r, w)
     for i in range(3):
         xdot[i] = x[3 + i]
     return K.forward_dynamics_into(thp, x[0:3], x[3:6], u, l2, g0, xdot[3:6], w33, w3)
@@ -105,7 +106,7 @@ def _lu_solve(LU, piv, b):
 
 
 @njit(**_JIT)
-def _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w):
+def _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys):
     """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x))."""
     n = x.shape[0]
     sqeps = math.sqrt(2.220446049250313e-16)
@@ -113,12 +114,12 @@ def _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33,
         dx = sqeps * max(abs(x[j]), 1e-3)
         xj = x[j]
         x[j] = xj + dx
-        closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
+        closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
         x[j] = xj
         for i in range(n):
             J[i, j] = (Fp[i] - F0[i]) / dx
     dt = sqeps * max(abs(t), 1.0)
-    closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
+    closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
     for i in range(n):
         Ft[i] = (Fp[i] - F0[i]) / dt
     return n + 1
@@ -145,12 +146,15 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
     u = np.empty(3); ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
     w33 = np.empty((3, 3)); w3 = np.empty(3)
     v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3)
+    ys = np.empty(1); u0 = np.empty(3)
     nrhs = 0; nsteps = 0; nrej = 0
     t = t_out[0]
-    ok = closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, F0, u, ref, Y, xi, w33, w3, v, a, r, w)
+    ok = closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, F0, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
     nrhs += 1
     X[0] = x; U[0] = u; R[0] = ref[0]
-    ynorm[0] = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi, v, a, r, w)
+    ynorm[0] = ys[0]
+    u0[:] = u
+    ys0 = ys[0]
     if not ok:
         return NOTPD, 1, nrhs, nsteps, nrej, t
     st = check(x, u, lim)
@@ -158,75 +162,95 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
         return st, 1, nrhs, nsteps, nrej, t
     h = h0
     jac_age = jac_reuse  # accepted steps since the Jacobian was computed
-    for k in range(1, t_out.shape[0]):
-        t_next = t_out[k]
-        while t < t_next:
-            h = min(h, hmax)
+    t_final = t_out[t_out.shape[0] - 1]
+    k = 1  # next output row
+    while k < t_out.shape[0]:
+        h = min(h, hmax)
+        last = False
+        if t + h >= t_final - 1e-12 * max(1.0, abs(t_final)):
+            h = t_final - t
+            last = True
+        if jac_age >= jac_reuse:
+            nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+            jac_age = 0
+        while True:
+            hd = h * d
+            for i in range(n):
+                for j in range(n):
+                    W[i, j] = -hd * J[i, j]
+                W[i, i] += 1.0
+            if not _lu_factor(W, piv):
+                return HMIN, k, nrhs, nsteps, nrej, t
+            for i in range(n):
+                k1[i] = F0[i] + hd * Ft[i]
+            _lu_solve(W, piv, k1)
+            for i in range(n):
+                tmp[i] = x[i] + 0.5 * h * k1[i]
+            ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+            for i in range(n):
+                k2[i] = F1[i] - k1[i]
+            _lu_solve(W, piv, k2)
+            for i in range(n):
+                k2[i] += k1[i]
+                xnew[i] = x[i] + h * k2[i]
+            ok2 = closed_loop_rhs(t + h, xnew, thp, law, cp, tp, l2, g0, F2, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+            nrhs += 2
+            for i in range(n):
+                k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
+            _lu_solve(W, piv, k3)
+            err = 0.0
+            for i in range(n):
+                sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
+                ei = abs(h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i])) / sc
+                if not (ei <= err):  # also catches NaN
+                    err = ei if math.isfinite(ei) else 1e300
+            if ok1 and ok2 and err <= 1.0:
+                break
+            nrej += 1
             last = False
-            if t + h >= t_next - 1e-12 * max(1.0, abs(t_next)):
-                h = t_next - t
-                last = True
-            if jac_age >= jac_reuse:
-                nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w)
+            if jac_age > 0:  # rejected with an old Jacobian: refresh it first
+                nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3,
+                                  v, a, r, w, ys)
                 jac_age = 0
-            while True:
-                hd = h * d
-                for i in range(n):
-                    for j in range(n):
-                        W[i, j] = -hd * J[i, j]
-                    W[i, i] += 1.0
-                if not _lu_factor(W, piv):
-                    return HMIN, k, nrhs, nsteps, nrej, t
-                for i in range(n):
-                    k1[i] = F0[i] + hd * Ft[i]
-                _lu_solve(W, piv, k1)
-                for i in range(n):
-                    tmp[i] = x[i] + 0.5 * h * k1[i]
-                ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3, v, a, r, w)
-                for i in range(n):
-                    k2[i] = F1[i] - k1[i]
-                _lu_solve(W, piv, k2)
-                for i in range(n):
-                    k2[i] += k1[i]
-                    xnew[i] = x[i] + h * k2[i]
-                ok2 = closed_loop_rhs(t + h, xnew, thp, law, cp, tp, l2, g0, F2, u, ref, Y, xi, w33, w3, v, a, r, w)
-                nrhs += 2
-                for i in range(n):
-                    k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
-                _lu_solve(W, piv, k3)
-                err = 0.0
-                for i in range(n):
-                    sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
-                    ei = abs(h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i])) / sc
-                    if not (ei <= err):  # also catches NaN
-                        err = ei if math.isfinite(ei) else 1e300
-                if ok1 and ok2 and err <= 1.0:
-                    break
-                nrej += 1
-                last = False
-                if jac_age > 0:  # rejected with an old Jacobian: refresh it first
-                    nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3,
-                                      v, a, r, w)
-                    jac_age = 0
-                h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / 3.0)) if err < 1e300 else 0.1 * h
-                if h < 1e-14 * max(1.0, abs(t)):
-                    return HMIN, k, nrhs, nsteps, nrej, t
-            nsteps += 1
-            jac_age += 1
-            t = t_next if last else t + h
+            h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / 3.0)) if err < 1e300 else 0.1 * h
+            if h < 1e-14 * max(1.0, abs(t)):
+                return HMIN, k, nrhs, nsteps, nrej, t
+        nsteps += 1
+        jac_age += 1
+        t_new = t_final if last else t + h
+        st = check(xnew, u, lim)
+        if st != OK:
             for i in range(n):
                 x[i] = xnew[i]
-                F0[i] = F2[i]
-            st = check(x, u, lim)
-            if st != OK:
-                return st, k, nrhs, nsteps, nrej, t
-            fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / 3.0)))
-            h = h * fac
-        X[k] = x
-        reference_into(tp, t, ref)
-        ynorm[k] = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, tmp[6:], Y, xi, v, a, r, w)
-        U[k] = u
-        R[k] = ref[0]
+            return st, k, nrhs, nsteps, nrej, t_new
+        # outputs inside (t, t_new]: the state by cubic Hermite on (x, F0) and (xnew, F2), third order
+        # like the step; u and ||Y^T r|| linearly between their values on the integrated states (evaluating
+        # the stiff boundary-layer law on an interpolated state would add noise of gain x interpolation error)
+        while k < t_out.shape[0] and (t_out[k] <= t_new or (last and k == t_out.shape[0] - 1)):
+            s_ = (t_out[k] - t) / h
+            if k == t_out.shape[0] - 1 and last:
+                s_ = 1.0
+            h00 = (1.0 + 2.0 * s_) * (1.0 - s_) * (1.0 - s_)
+            h10 = s_ * (1.0 - s_) * (1.0 - s_)
+            h01 = s_ * s_ * (3.0 - 2.0 * s_)
+            h11 = s_ * s_ * (s_ - 1.0)
+            for i in range(n):
+                tmp[i] = h00 * x[i] + h * h10 * F0[i] + h01 * xnew[i] + h * h11 * F2[i]
+            X[k] = tmp
+            for i in range(3):
+                U[k, i] = (1.0 - s_) * u0[i] + s_ * u[i]
+            ynorm[k] = (1.0 - s_) * ys0 + s_ * ys[0]
+            reference_into(tp, t_out[k], ref)
+            R[k] = ref[0]
+            k += 1
+        u0[:] = u
+        ys0 = ys[0]
+        t = t_new
+        for i in range(n):
+            x[i] = xnew[i]
+            F0[i] = F2[i]
+        fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / 3.0)))
+        h = h * fac
     return OK, t_out.shape[0], nrhs, nsteps, nrej, t
 
 
