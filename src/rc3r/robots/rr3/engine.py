@@ -198,12 +198,14 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             for i in range(n):
                 k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
             _lu_solve(W, piv, k3)
-            err = 0.0
+            err = 0.0  # RMS norm of the scaled error estimate (Hairer & Wanner; SciPy's solve_ivp)
             for i in range(n):
                 sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
-                ei = abs(h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i])) / sc
-                if not (ei <= err):  # also catches NaN
-                    err = ei if math.isfinite(ei) else 1e300
+                ei = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]) / sc
+                err += ei * ei
+            err = math.sqrt(err / n)
+            if not (err <= 1e300):  # NaN or overflow
+                err = 1e300
             if ok1 and ok2 and err <= 1.0:
                 break
             nrej += 1
