@@ -87,9 +87,9 @@ class SimOptions:
     jac_reuse : int
         Fast engine, continuous mode: accepted Rosenbrock steps one finite-difference
         Jacobian is kept for (it is refreshed at once after a step rejected with an
-        older one). 1 = every step (MATLAB's ode23s). The default 5 does the same
-        runs 1.3-1.6x faster at the same accuracy against a tight SciPy Radau solution
-        (``rc3r bench``, docs/performance.md).
+        older one). 1 = every step (MATLAB's ode23s). The default 5 makes the FBL
+        runs about 2x faster and the robust runs 1.0-1.3x, at the same accuracy against
+        a tight SciPy Radau solution (``rc3r bench``, docs/performance.md).
     q_max, qd_max, u_max : float
         Divergence bounds [rad], [rad/s], [N m].
     """
