@@ -112,11 +112,15 @@ def test_paper_claims_continuous():
     for spec in paper_scenarios():
         _, m = execute(spec)
         rows.append(m)
-    claims = {c["claim"]: c["holds"] for c in _claims(rows)}
+    listed = _claims(rows)
+    claims = {c["claim"]: c["holds"] for c in listed}
     assert claims["FBL ideal << FBL perturbed (10x)"]
     assert claims["robust perturbed << FBL perturbed (10x)"]
     assert claims["eps 0.05 has smaller error than eps 0.5"]
     assert not claims["eps 0.05 has more chattering than eps 0.5 (>= 2x)"]
+    # the verdict the paper's reader would question is explained, not just reported
+    why = next(c["explanation"] for c in listed if c["claim"].startswith("eps 0.05 has more chattering"))
+    assert "cannot chatter" in why and "sampled-data effect" in why
 
 
 def test_paper_claims_sampled_chattering():

@@ -111,7 +111,9 @@ def _paper(paper, out: Path) -> int:
     md = ["# rc3r paper: section 4 reproduced", "",
           paper.SUMMARY_INTRO, "",
           _table(rows), "", f"Chattering: {CHATTERING_DEFINITION}.", "", "## The paper's claims on these numbers", ""]
-    md += [f"- [{'x' if c['holds'] else ' '}] {c['mode']}: {c['claim']} ({c['why']})" for c in claims]
+    for c in claims:
+        md += [f"- [{'x' if c['holds'] else ' '}] {c['mode']}: {c['claim']} ({c['why']}).",
+               f"  {'Holds' if c['holds'] else 'Does not hold'}: {c['explanation']}."]
     md += ["", f"Total wall time {total:.1f} s. Figures: `<mode>/<scenario>/run.png`, `errors-<mode>.png`.", ""]
     atomic_write_text(out / "summary.md", "\n".join(md))
     print("\n".join(md))

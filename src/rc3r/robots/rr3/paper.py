@@ -82,7 +82,8 @@ def scenarios(duration: float | None = None, rate: float | None = None) -> list:
 def claims(rows: list[dict]) -> list[dict]:
     """The paper's qualitative claims, checked on the measured metrics (per mode).
 
-    Each entry: ``mode``, ``claim``, ``holds`` and ``why`` (the numbers compared).
+    Each entry: ``mode``, ``claim``, ``holds``, ``why`` (the numbers compared) and
+    ``explanation`` (what the theory says about this verdict in this mode).
     """
     out = []
     for mode in sorted({(r["mode"], r["rate_hz"]) for r in rows}, key=str):
@@ -107,5 +108,23 @@ def claims(rows: list[dict]) -> list[dict]:
              chat("robust-perturbed-eps0.05") >= CHATTERING_MARGIN * chat("robust-perturbed"),
              f"chattering {chat('robust-perturbed-eps0.05'):.4g} vs {chat('robust-perturbed'):.4g} N m/s"),
         ]
-        out += [{"mode": label, "claim": c, "holds": bool(h), "why": why} for c, h, why in checks]
+        sampled = mode[1] is not None
+        notes = [
+            "with the exact model the law cancels the dynamics and the error left is the integrator's "
+            "(or the zero-order hold's); a wrong model leaves the torque error Y (theta - theta_0), which the "
+            "PD loop only attenuates",
+            "the robust term delta = -rho Y^T r / max(||Y^T r||, eps) answers the same model error; the error "
+            "is then ultimately bounded by a bound that shrinks with rho eps (docs/robustness.md)",
+            "the boundary layer's width sets the ultimate bound, so a smaller eps gives a smaller error",
+            ("a digital controller holds the boundary-layer gain (rho / eps) Y Y^T for a whole period; at "
+             f"{mode[1] / 1000:g} kHz that period is too long for eps = 0.05 but not for 0.5, and the torque "
+             "chatters (safe rate x eps is about 40-50 kHz, docs/robustness.md)") if sampled else
+            ("in continuous time the boundary-layer law is a continuous function of the state and the "
+             "integrator follows it: it cannot chatter at any eps (the measure stays near the smooth torque's "
+             "1247 N m/s at eps = 0.01-0.5 with rtol 1e-8; what rises above it at small eps with the default "
+             "tolerances is integrator noise). The paper's chattering is a sampled-data effect: see the "
+             "sampled rows"),
+        ]
+        out += [{"mode": label, "claim": c, "holds": bool(h), "why": why, "explanation": note}
+                for (c, h, why), note in zip(checks, notes)]
     return out
