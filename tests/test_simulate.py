@@ -2,6 +2,8 @@
 divergence handling, and the paper's section-4 numbers."""
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 
@@ -129,3 +131,27 @@ def test_bad_options(kwargs):
 def test_bad_initial_state(plant, bounds):
     with pytest.raises(ParameterError):
         simulate(plant, FeedbackLinearization(bounds.theta0), paper_trajectory(), x0=[0, 0, np.nan, 0, 0, 0])
+
+
+def test_wall_time_never_includes_compilation(monkeypatch):
+    """The first fast run of a process runs two output periods untimed first (numba's compile or
+    cache load), so its wall_time_s is the simulation's only: with the warm-up forgotten, a fresh
+    integrator key would book it. Checked by counting the engine calls, not by timing."""
+    S = importlib.import_module("rc3r.simulate")
+    from rc3r.study import build_run
+
+    spec = build_run(controller="fbl", duration=0.05)
+    calls = []
+    real = spec.plant.fast_engine.continuous
+
+    def counting(*a, **k):
+        calls.append(a[5].shape[0])  # rows of t_out in this call
+        return real(*a, **k)
+
+    monkeypatch.setattr(S, "_WARMED", set())
+    monkeypatch.setattr(spec.plant.fast_engine, "continuous", staticmethod(counting))
+    S.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    assert calls[0] == 3 and calls[1] == 51  # warm-up of 2 periods (3 rows), then the 0.05 s run
+    calls.clear()
+    S.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    assert calls == [51]  # once per process and integrator

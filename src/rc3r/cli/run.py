@@ -23,6 +23,13 @@ def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
+def announce_compile(plant) -> None:
+    """Say so before a first run compiles the robot's simulator (numba; about 20 s, once)."""
+    eng = getattr(plant, "fast_engine", None)
+    if eng is not None and not getattr(eng, "is_cached", lambda: True)():
+        _progress("rc3r: compiling the simulator's kernels (numba): about 20 s, once; cached on disk afterwards")
+
+
 def _fmt3(x) -> str:
     return " ".join(f"{v:.3g}" for v in x)
 
@@ -43,6 +50,7 @@ def cmd_run(args) -> int:
     check_output_path(out)
     if out.is_dir() and any(out.iterdir()) and not args.force:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
+    announce_compile(spec.plant)
     _progress(f"rc3r run: {spec.name} on plant '{spec.plant.label}', {spec.options.mode}"
               f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
               f"{spec.options.duration:g} s, engine {spec.options.engine} ...")
@@ -85,6 +93,7 @@ def cmd_paper(args) -> int:
 def _paper(paper, out: Path) -> int:
     from ..plotting import plot_error_comparison
 
+    announce_compile(paper.scenarios(duration=0.01)[0].plant)
     t_start = time.perf_counter()
     rows, results = [], {}
     for mode, rate in (("continuous", None), ("sampled", paper.PAPER_SAMPLED_RATE)):

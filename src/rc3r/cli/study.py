@@ -22,6 +22,7 @@ from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..provenance import provenance
 from . import EXIT
 from ._output import _acquire, check_output_path
+from .run import announce_compile
 
 
 def _progress_bar(total: int, done: int, what: str):
@@ -38,7 +39,8 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
         raise ConfigError("nothing to run: the campaign has no jobs")
     if args.scheduler is not None and args.workers is not None:
         raise ConfigError("give --workers or --scheduler, not both")
-    n = jobs[0].build().plant.n  # bad input (box, robot, gains, config) refused here, before any worker starts
+    first = jobs[0].build()  # bad input (box, robot, gains, config) refused here, before any worker starts
+    n = first.plant.n
     lock = out.parent / f".{out.name}.lock"
     _acquire(lock)
     try:
@@ -66,6 +68,7 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
             done = sum(1 for j in jobs if j.id in table.done)
             where = args.scheduler or f"{args.workers or os.cpu_count()} local worker(s)"
             print(f"rc3r {kind}: {len(jobs)} runs, {done} already done, on {where} -> {out}/", file=sys.stderr)
+            announce_compile(first.plant)
             bar = _progress_bar(len(jobs), done, kind)
             t0 = time.perf_counter()
             try:

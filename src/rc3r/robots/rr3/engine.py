@@ -333,6 +333,21 @@ class FastEngine:
     p = 15
 
     @staticmethod
+    def is_cached() -> bool:
+        """True if numba's disk cache holds both integrators (no compilation on first use).
+
+        Reads numba's cache index paths (an internal of numba 0.5x-0.6x); if they cannot be
+        read, answers True (no announcement rather than a wrong one).
+        """
+        import os
+
+        try:
+            return all(os.path.exists(f._cache._cache_file._index_path)
+                       for f in (integrate_continuous, integrate_sampled))
+        except AttributeError:
+            return True
+
+    @staticmethod
     def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse=1):
         l2, g0 = plant.params.lengths[1], plant.params.g0
         return integrate_continuous(x0, t_out, plant.theta, code, cp, tp, l2, g0, rtol, atol, h0, hmax,
