@@ -63,3 +63,28 @@ def test_docstring_examples_run():
     module = sys.modules["rc3r.simulate"]  # rc3r.simulate is the function; the module is in sys.modules
     failed, attempted = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert attempted >= 3 and failed == 0
+
+
+def test_theory_figures_compare_laws_per_joint_and_show_the_boundary_layer():
+    """comparison_figure: 2 axes per joint (log |e_j|, u_j), every run on each axis, the legend
+    outside the data axes; boundary_layer_figure: ||Y^T r|| with each run's eps drawn."""
+    import matplotlib
+
+    from rc3r.plotting import boundary_layer_figure, comparison_figure
+    from rc3r.study import build_run, execute
+
+    backend = matplotlib.get_backend()
+    runs = {name: execute(build_run(controller=c, perturbed=True, eps=e, duration=0.2))[0]
+            for name, c, e in (("FBL", "fbl", None), ("robust 0.5", "robust", 0.5), ("robust 0.05", "robust", 0.05))}
+    fig = comparison_figure(runs, "t", "caption")
+    axes = fig.get_axes()
+    assert len(axes) == 6 and all(len(ax.get_lines()) == 3 for ax in axes)
+    assert axes[0].get_yscale() == "log"
+    legend = axes[1].get_legend()
+    assert legend is not None and [t.get_text() for t in legend.get_texts()] == list(runs)
+    robust = {k: v for k, v in runs.items() if k.startswith("robust")}
+    fig2 = boundary_layer_figure(robust, "t", "caption")
+    ax = fig2.get_axes()[0]
+    eps_lines = sorted(ln.get_ydata()[0] for ln in ax.get_lines() if ln.get_linestyle() == "--")
+    assert eps_lines == [0.05, 0.5]
+    assert matplotlib.get_backend() == backend

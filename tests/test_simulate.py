@@ -155,3 +155,16 @@ def test_wall_time_never_includes_compilation(monkeypatch):
     calls.clear()
     S.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
     assert calls == [51]  # once per process and integrator
+
+
+def test_boundary_layer_metric_by_hand():
+    """||Y^T r|| / eps after t = 0: [0.1, 0.6, 0.3] / 0.5 = [0.2, 1.2, 0.6] -> median 0.6, max 1.2,
+    outside the layer (> 1) one row of three; no eps (FBL) or eps_i (eq. 7): no entry."""
+    from types import SimpleNamespace
+
+    from rc3r.simulate.metrics import _layer
+
+    res = SimpleNamespace(yt_r_norm=np.array([0.0, 0.1, 0.6, 0.3]))
+    got = _layer(res, 0.5)
+    assert got == pytest.approx({"median": 0.6, "max": 1.2, "outside": 1 / 3}, rel=1e-12)
+    assert _layer(res, None) is None and _layer(res, [0.5] * 15) is None

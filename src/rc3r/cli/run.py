@@ -90,6 +90,32 @@ def cmd_paper(args) -> int:
         return _paper(paper, tmp)
 
 
+def _theory_figures(res: dict, out: Path, mode: str, label: str) -> None:
+    """FBL against robust per joint (ideal, perturbed) and ||Y^T r|| against eps."""
+    from ..io import atomic_savefig
+    from ..plotting import boundary_layer_figure, comparison_figure
+
+    for case in ("ideal", "perturbed"):
+        runs = {f"FBL {case}": res.get(f"fbl-{case}"), f"robust {case} eps 0.5": res.get(f"robust-{case}")}
+        if case == "perturbed":
+            runs["robust perturbed eps 0.05"] = res.get("robust-perturbed-eps0.05")
+        runs = {k: v for k, v in runs.items() if v is not None}
+        if runs:
+            atomic_savefig(comparison_figure(
+                runs, f"FBL vs robust, {case} plant, {label}",
+                "Same plant, same trajectory, one axis per joint. Ideal: FBL's error is the integrator's; "
+                "perturbed: FBL is left with the model error, the robust term removes it down to the boundary "
+                "layer (a smaller eps: smaller error)."), out / f"compare-{case}-{mode}.png", dpi=110)
+    robust = {f"eps {r.controller.get('eps'):g}": r for n, r in res.items()
+              if n.startswith("robust-perturbed") and isinstance(r.controller.get("eps"), (int, float))}
+    if robust:
+        atomic_savefig(boundary_layer_figure(
+            robust, f"robust law, perturbed plant: ||Y^T r|| and the boundary layer, {label}",
+            "Below its dashed line a run is inside its boundary layer, where the robust term is the linear "
+            "gain (rho/eps) Y Y^T r; the ultimate error bound scales with rho eps."),
+            out / f"boundary-layer-{mode}.png", dpi=110)
+
+
 def _paper(paper, out: Path) -> int:
     from ..plotting import plot_error_comparison
 
@@ -108,9 +134,10 @@ def _paper(paper, out: Path) -> int:
             res.save(sub, m, spec.name)
             rows.append(m)
             results[(mode, spec.name)] = res
+        label = mode + ("" if rate is None else f" {rate / 1000:g} kHz")
         plot_error_comparison({n: r for (md, n), r in results.items() if md == mode},
-                              out / f"errors-{mode}.png", f"tracking error, {mode}"
-                              + ("" if rate is None else f" {rate / 1000:g} kHz"))
+                              out / f"errors-{mode}.png", f"tracking error, {label}")
+        _theory_figures({n: r for (md, n), r in results.items() if md == mode}, out, mode, label)
     claims = paper.claims(rows)
     total = time.perf_counter() - t_start
     summary = {"scenarios": rows, "claims": claims, "sampled_rate_hz": paper.PAPER_SAMPLED_RATE,
@@ -123,7 +150,9 @@ def _paper(paper, out: Path) -> int:
     for c in claims:
         md += [f"- [{'x' if c['holds'] else ' '}] {c['mode']}: {c['claim']} ({c['why']}).",
                f"  {'Holds' if c['holds'] else 'Does not hold'}: {c['explanation']}."]
-    md += ["", f"Total wall time {total:.1f} s. Figures: `<mode>/<scenario>/run.png`, `errors-<mode>.png`.", ""]
+    md += ["", f"Total wall time {total:.1f} s. Figures: `<mode>/<scenario>/run.png`, `errors-<mode>.png`, "
+           "`compare-ideal-<mode>.png` and `compare-perturbed-<mode>.png` (FBL vs robust per joint, errors and "
+           "torques), `boundary-layer-<mode>.png` (||Y^T r|| against eps).", ""]
     atomic_write_text(out / "summary.md", "\n".join(md))
     print("\n".join(md))
     return EXIT["ok"]

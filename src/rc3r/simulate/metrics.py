@@ -12,6 +12,10 @@ Definitions (per joint j, over the stored run of length T):
   runs over every controller sample (exact for a zero-order-hold signal); in
   continuous mode over the stored grid (``output_rate``, default 1 kHz). A smooth
   torque of amplitude A at 1 rad/s scores about 0.64 A; chattering adds to it.
+* ``boundary_layer`` -- robust law (eq. 6) only: ``median`` and ``max`` of
+  :math:`\|Y^T r\| / \epsilon` over the stored rows after t = 0, and ``outside`` = the
+  fraction of them with :math:`\|Y^T r\| > \epsilon` (outside the layer the robust term
+  is the unit vector of magnitude rho; inside it the linear gain rho/eps).
 """
 from __future__ import annotations
 
@@ -24,6 +28,13 @@ CHATTERING_DEFINITION = "total variation of u per second [N m/s] (sampled: every
 
 def _tolist(x):
     return [float(v) for v in np.asarray(x).ravel()]
+
+
+def _layer(res, eps):
+    if not isinstance(eps, (int, float)) or isinstance(eps, bool) or res.yt_r_norm.size < 2:
+        return None
+    x = np.asarray(res.yt_r_norm[1:]) / float(eps)
+    return {"median": float(np.median(x)), "max": float(x.max()), "outside": float(np.mean(x > 1.0))}
 
 
 def run_metrics(res, seed=None) -> dict:
@@ -58,6 +69,7 @@ def run_metrics(res, seed=None) -> dict:
         "max_abs_torque": _tolist(np.abs(res.u).max(axis=0)) if res.u.size else nan,
         "chattering": _tolist(tv),
         "chattering_definition": CHATTERING_DEFINITION,
+        "boundary_layer": _layer(res, c.get("eps")),
         "wall_time_s": float(res.wall_time_s),
         "rhs_evals": res.rhs_evals,
         "steps": res.steps,
