@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from rc3r.errors import Rc3rError
-from rc3r.io import read_toml
+from rc3r.io import read_toml, tomllib
 from rc3r.robots import load_urdf_robot, robot_class
 from rc3r.study import build_run
 from rc3r.uncertainty import load_box
@@ -124,8 +124,7 @@ def test_mutated_run_config_is_built_or_refused_cleanly(tmp_path_factory, text):
 def test_the_unmutated_files_load():
     """The fuzzers start from files that load: a refusal above is the mutation's doing."""
     assert robot_class().from_urdf(ROOT / "urdf" / "rr3.urdf").n == 3
-    assert build_run(config=__import__("tomllib" if __import__("sys").version_info >= (3, 11) else "tomli")
-                     .loads(CONFIG)).options.rate == 1000.0
+    assert build_run(config=tomllib.loads(CONFIG)).options.rate == 1000.0
 
 
 @pytest.mark.parametrize("text", ["", "\x00", "<robot>", '<robot name="x"/>', "<?xml version='1.0'?>"])

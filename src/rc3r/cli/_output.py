@@ -24,7 +24,7 @@ from pathlib import Path
 from ..errors import ConfigError
 from ..io import apply_umask
 
-__all__ = ["output_dir", "check_output_path"]
+__all__ = ["output_dir", "check_output_path", "locked"]
 
 
 #: Files that mark a directory as rc3r's own output (it may then be replaced as a whole).
@@ -105,35 +105,44 @@ def _acquire(lock: Path) -> None:
 
 
 @contextmanager
+def locked(final: Path):
+    """Hold ``.<name>.lock`` beside the directory ``final`` (refused while another live rc3r holds it)."""
+    lock = final.parent / f".{final.name}.lock"
+    _acquire(lock)
+    try:
+        yield
+    finally:
+        lock.unlink(missing_ok=True)
+
+
+@contextmanager
 def output_dir(path):
     """Yield a temporary directory that replaces ``path`` as a whole on success (module docstring)."""
     final = check_output_path(path)
-    lock = final.parent / f".{final.name}.lock"
-    _acquire(lock)
-    tmp = None
-    try:
-        try:
-            tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.tmp-", dir=final.parent))
-        except OSError as exc:
-            raise ConfigError(f"--out {path}: cannot write in {final.parent}: {exc.strerror or exc}") from None
-        yield tmp
-        apply_umask(tmp, directory=True)
-        old = None
-        if final.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=final.parent))
-            os.replace(final, old / "previous")
-        try:
-            os.replace(tmp, final)
-        except OSError as exc:
-            if old is not None:  # put the previous results back
-                os.replace(old / "previous", final)
-            if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EROFS):
-                raise ConfigError(f"--out {path}: {exc.strerror}") from None
-            raise
+    with locked(final):
         tmp = None
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    finally:
-        if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
-        lock.unlink(missing_ok=True)
+        try:
+            try:
+                tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.tmp-", dir=final.parent))
+            except OSError as exc:
+                raise ConfigError(f"--out {path}: cannot write in {final.parent}: {exc.strerror or exc}") from None
+            yield tmp
+            apply_umask(tmp, directory=True)
+            old = None
+            if final.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=final.parent))
+                os.replace(final, old / "previous")
+            try:
+                os.replace(tmp, final)
+            except OSError as exc:
+                if old is not None:  # put the previous results back
+                    os.replace(old / "previous", final)
+                if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EROFS):
+                    raise ConfigError(f"--out {path}: {exc.strerror}") from None
+                raise
+            tmp = None
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+        finally:
+            if tmp is not None:
+                shutil.rmtree(tmp, ignore_errors=True)

@@ -40,14 +40,12 @@ def cmd_run(args) -> int:
     A diverged run writes its data up to the divergence, then raises
     :class:`~rc3r.errors.DivergenceError` (exit 3).
     """
-    if args.out is not None:
-        check_output_path(args.out)  # before anything is announced or simulated
     cfg = {} if args.config is None else read_toml(args.config, "config file")
     spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
                      eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
                      payload=args.payload, payload_com=args.payload_com, config=cfg)
     out = Path(args.out if args.out is not None else Path("out") / "run" / spec.name)
-    check_output_path(out)
+    check_output_path(out)  # before anything is announced or simulated
     if out.is_dir() and any(out.iterdir()) and not args.force:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     announce_compile(spec.plant)

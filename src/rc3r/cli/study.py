@@ -21,7 +21,7 @@ from ..errors import ConfigError
 from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..provenance import provenance
 from . import EXIT
-from ._output import _acquire, check_output_path
+from ._output import check_output_path, locked
 from .run import announce_compile
 
 
@@ -41,9 +41,7 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
         raise ConfigError("give --workers or --scheduler, not both")
     first = jobs[0].build()  # bad input (box, robot, gains, config) refused here, before any worker starts
     n = first.plant.n
-    lock = out.parent / f".{out.name}.lock"
-    _acquire(lock)
-    try:
+    with locked(out):
         meta_path = out / "campaign.json"
         request = dict(request, kind=kind, jobs=len(jobs))
         if meta_path.exists():
@@ -85,8 +83,6 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
         print(f"{written} runs in {wall:.1f} s ({60 * written / max(wall, 1e-9):.0f} runs/min); "
               f"{len(rows)} of {len(jobs)} in the table", file=sys.stderr)
         return finish(out, rows, meta)
-    finally:
-        lock.unlink(missing_ok=True)
 
 
 def _g(x) -> str:

@@ -186,7 +186,8 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             _lu_solve(W, piv, k1)
             for i in range(n):
                 tmp[i] = x[i] + 0.5 * h * k1[i]
-            ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+            ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3,
+                                  v, a, r, w, ys)
             for i in range(n):
                 k2[i] = F1[i] - k1[i]
             _lu_solve(W, piv, k2)
@@ -325,7 +326,8 @@ class FastEngine:
     """The 3R's compiled simulator behind the interface :mod:`rc3r.simulate` expects.
 
     ``continuous(...)`` returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``;
-    ``sampled(..., s0, ...)`` (first sample index) returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``; both fill
+    ``sampled(..., s0, ...)`` (s0: first sample index) returns
+    ``(status, n_stored, n_rhs, n_samples_done, t_end)``; both fill
     the output arrays ``X`` (state), ``U`` (torque), ``R`` (q_d), ``yn`` (||Y^T r||).
     """
 
@@ -348,7 +350,7 @@ class FastEngine:
             return True
 
     @staticmethod
-    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse=1):
+    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse):
         l2, g0 = plant.params.lengths[1], plant.params.g0
         return integrate_continuous(x0, t_out, plant.theta, code, cp, tp, l2, g0, rtol, atol, h0, hmax,
                                     lim, X, U, R, yn, jac_reuse)
