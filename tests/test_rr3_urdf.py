@@ -98,6 +98,70 @@ def test_committed_urdf_loads_in_yourdfpy():
     assert [j.type for j in robot.robot.joints] == ["revolute"] * 3 + ["fixed"]
 
 
+# ---- visual geometry ------------------------------------------------------------------------
+
+
+def test_committed_urdf_has_a_visual_model_of_two_cylinders_per_link():
+    """Pinocchio reads 6 visual cylinders (housing + shaft per link); at a random q each shaft spans
+    its joint's origin to the next joint's origin (the tool for link 3), each housing sits on its joint
+    axis: the visuals are where the kinematics are. Placements compose a few rigid transforms of O(1) m:
+    rounding ~1e-15, so 1e-12."""
+    model, collision, visual = pin.buildModelsFromUrdf(str(REPO_URDF), geometry_types=[
+        pin.GeometryType.COLLISION, pin.GeometryType.VISUAL])
+    assert visual.ngeoms == 6 and collision.ngeoms == 0
+    assert pin.buildGeomFromUrdf(model, str(REPO_URDF), pin.GeometryType.VISUAL).ngeoms == 6
+    assert [g.parentJoint for g in visual.geometryObjects] == [1, 1, 2, 2, 3, 3]
+    q = np.array([0.3, -1.1, 2.0])
+    data, gdata = model.createData(), pin.GeometryData(visual)
+    pin.forwardKinematics(model, data, q)
+    pin.updateFramePlacements(model, data)
+    pin.updateGeometryPlacements(model, data, visual, gdata)
+    ends = [data.oMi[1].translation, data.oMi[2].translation, data.oMi[3].translation,
+            data.oMf[model.getFrameId("tool")].translation]
+    for i in range(3):
+        housing, shaft = visual.geometryObjects[2 * i], visual.geometryObjects[2 * i + 1]
+        assert isinstance(shaft.geometry, type(housing.geometry)) and type(shaft.geometry).__name__ == "Cylinder"
+        assert shaft.geometry.radius == 0.05 and housing.geometry.radius == 0.075  # VISUAL_RADIUS x min(l) = 1 m
+        M = gdata.oMg[2 * i + 1]
+        h = shaft.geometry.halfLength
+        tips = sorted([M.act(np.array([0, 0, -h])), M.act(np.array([0, 0, h]))], key=lambda x: np.linalg.norm(x - ends[i]))
+        np.testing.assert_allclose(tips[0], ends[i], atol=1e-12)
+        np.testing.assert_allclose(tips[1], ends[i + 1], atol=1e-12)
+        axis = data.oMi[i + 1].rotation[:, 2]  # joint i turns about its frame's z
+        np.testing.assert_allclose(gdata.oMg[2 * i].translation, ends[i], atol=1e-12)
+        np.testing.assert_allclose(abs(gdata.oMg[2 * i].rotation[:, 2] @ axis), 1.0, atol=1e-12)
+
+
+def test_visual_geometry_does_not_change_the_dynamics(tmp_path, table1):
+    """The same URDF without its <visual>/<material> elements gives bit-identical Pinocchio inertias,
+    joint placements and the same ArmParams: the visuals are for viewers only."""
+    import re
+
+    text = make_urdf(table1)
+    bare = re.sub(r"\s*<material name=\"[^\"]*\">.*?</material>", "", text, flags=re.S)
+    bare = re.sub(r"\s*<visual.*?</visual>", "", bare, flags=re.S)
+    assert "<visual" in text and "<visual" not in bare and "<material" not in bare
+    a, b = pin.buildModelFromXML(text), pin.buildModelFromXML(bare)
+    for i in range(1, 4):
+        np.testing.assert_array_equal(a.inertias[i].toDynamicParameters(), b.inertias[i].toDynamicParameters())
+        np.testing.assert_array_equal(a.jointPlacements[i].homogeneous, b.jointPlacements[i].homogeneous)
+    assert [f.name for f in a.frames] == [f.name for f in b.frames]
+    loaded = load_arm(_write(tmp_path, bare, "bare.urdf")).params
+    np.testing.assert_array_equal(load_arm(REPO_URDF).params.to_vector(), loaded.to_vector())
+
+
+def test_committed_urdf_visuals_load_in_yourdfpy():
+    """yourdfpy (what rc3r validates URDFs with, and a viewer) sees two cylinders on each link."""
+    import yourdfpy
+
+    robot = yourdfpy.URDF.load(str(REPO_URDF), build_scene_graph=False, load_meshes=False)
+    vis = {lk.name: [(v.name, v.geometry.cylinder.radius, v.geometry.cylinder.length) for v in lk.visuals]
+           for lk in robot.robot.links}
+    assert vis["base_link"] == [] and vis["tool"] == []
+    for i in (1, 2, 3):
+        assert vis[f"link{i}"] == [(f"link{i}_housing", 0.075, 0.15), (f"link{i}_shaft", 0.05, 1.0)]
+
+
 def test_load_arm_params_round_trip_table1(arm, table1):
     """load_arm(rr3.urdf).params == Table 1 (CoM and inertia back in DH frame i)."""
     _assert_params_close(arm.params, table1)

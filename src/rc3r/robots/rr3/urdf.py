@@ -5,6 +5,9 @@ about z; DH frame *i* is reached by ``A_i = Trans_z(d_i) Trans_x(a_i) Rot_x(alph
 = (R_i, p_i)`` (:func:`dh_fixed`). Joint *i+1* has ``<origin>`` = ``A_i`` in link *i*,
 a fixed ``tool_joint`` at ``A_3`` carries ``l3``, and the ``<inertial>`` of link *i*
 has ``xyz = p_i + R_i r_ci``, ``rpy = rpy(R_i)``: inertia entries of DH frame *i*.
+Each link also gets two ``<visual>`` cylinders (a housing on its joint's axis, a shaft
+to the next joint or the tool; :data:`VISUAL_RADIUS`), for viewers (Pinocchio's
+visualizers, yourdfpy); they do not enter the dynamics.
 
 Reading (:func:`load_arm`) accepts any URDF **kinematically equivalent** to the DH
 table, whatever its joint origins, link frames, ``<axis>`` vectors and fixed links.
@@ -51,7 +54,7 @@ from .params import G0, ArmParams, LinkParams, require_simulable
 __all__ = [
     "dh_fixed", "make_urdf", "write_urdf", "load_arm", "LoadedArm", "default_urdf_path", "REPO_URDF",
     "model_from_params", "params_from_model", "dh_structure", "DHStructure", "PLACEMENT_TOL",
-    "L3_DEFAULT", "TOOL_JOINT",
+    "L3_DEFAULT", "TOOL_JOINT", "VISUAL_RADIUS", "VISUAL_MATERIALS",
 ]
 
 #: DH table of the paper: (alpha_i, uses_d) -- d_i = l_i for joint 1, a_i = l_i otherwise.
@@ -71,6 +74,13 @@ PLACEMENT_TOL = 1e-9
 #: l3 [m] used when the URDF has no fixed frame on the DH x3 axis (module
 #: docstring); any l3 > 0 gives the same theta (only X3 = l3 + r_cx3 enters).
 L3_DEFAULT = 1.0
+
+#: Radius of the links' visual cylinders, as a fraction of the shortest link length (joint
+#: housings: 1.5 times it, 3 times it long). Visual geometry only: no effect on the dynamics.
+VISUAL_RADIUS = 0.05
+
+#: Colours (URDF ``rgba``) of the visual geometry: links, joint housings.
+VISUAL_MATERIALS = {"rc3r_link": "0.35 0.55 0.8 1", "rc3r_joint": "0.25 0.25 0.25 1"}
 
 #: Name of the fixed joint :func:`make_urdf` writes at DH frame 3; when a URDF has
 #: one, it must be DH frame 3 (it fixes l3, d3 = 0, alpha3 = 0 and q3's zero).
@@ -136,8 +146,11 @@ def make_urdf(p: ArmParams) -> str:
             "`rc3r make-urdf`. Units SI; DH table and frames in docs/conventions.md. "
         )
     )
+    for name, rgba in VISUAL_MATERIALS.items():
+        ET.SubElement(ET.SubElement(robot, "material", name=name), "color", rgba=rgba)
     ET.SubElement(robot, "link", name="base_link")
     parent = "base_link"
+    radius = round(VISUAL_RADIUS * min(p.lengths), 12)  # rounded: clean URDF text (visual only)
     joint_origin = (np.zeros(3), (0.0, 0.0, 0.0))
     for i, link in enumerate(p.links, 1):
         j = ET.SubElement(robot, "joint", name=f"joint{i}", type="revolute")
@@ -157,6 +170,7 @@ def make_urdf(p: ArmParams) -> str:
             inertial, "inertia",
             ixx=_num(ixx), ixy=_num(ixy), ixz=_num(ixz), iyy=_num(iyy), iyz=_num(iyz), izz=_num(izz),
         )
+        _visuals(lk, i, pos, radius)
         joint_origin = (pos, _rpy(R))
         parent = f"link{i}"
     tool = ET.SubElement(robot, "joint", name=TOOL_JOINT, type="fixed")
@@ -166,6 +180,22 @@ def make_urdf(p: ArmParams) -> str:
     ET.SubElement(robot, "link", name="tool")
     ET.indent(robot, space="  ")
     return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n"
+
+
+def _visuals(link: ET.Element, i: int, pos: np.ndarray, radius: float) -> None:
+    """Visual geometry of link ``i`` (no effect on the dynamics): a housing on joint ``i``'s axis
+    and a shaft from joint ``i`` to the next joint (or the tool), ``pos`` in the link's frame."""
+    housing = ET.SubElement(link, "visual", name=f"link{i}_housing")
+    ET.SubElement(housing, "origin", xyz="0 0 0", rpy="0 0 0")
+    ET.SubElement(ET.SubElement(housing, "geometry"), "cylinder", radius=_num(round(1.5 * radius, 12)),
+                  length=_num(round(3 * radius, 12)))
+    ET.SubElement(housing, "material", name="rc3r_joint")
+    shaft = ET.SubElement(link, "visual", name=f"link{i}_shaft")
+    length = float(np.linalg.norm(pos))
+    # a URDF cylinder lies along its z axis: along z for link 1 (d1), turned onto x for links 2, 3 (a_i)
+    ET.SubElement(shaft, "origin", xyz=_vec(pos / 2), rpy="0 0 0" if i == 1 else _vec((0.0, math.pi / 2, 0.0)))
+    ET.SubElement(ET.SubElement(shaft, "geometry"), "cylinder", radius=_num(radius), length=_num(length))
+    ET.SubElement(shaft, "material", name="rc3r_link")
 
 
 def write_urdf(p: ArmParams, path: str | Path) -> Path:
