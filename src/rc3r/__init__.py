@@ -10,61 +10,61 @@ Public API (everything a script or notebook needs)::
 
 Module map (one concept each; ``docs/architecture.md`` has the same map with more words):
 
-=================================  ==============================================================
-``rc3r``                           this public API
-``rc3r.robots``                    registry of robots: :func:`load_robot`, :data:`ROBOTS`
-``rc3r.robots.base``               the robot contract :class:`Robot`: n, p, theta, Y(q, qd, v, a)
-``rc3r.robots.rr3``                the paper's 3R arm (everything that names it)
-``rc3r.robots.rr3.params``         link parameters (paper convention), theta, Table 1
-``rc3r.robots.rr3.kernels``        compiled closed-form M, S, g, Y (numba)
-``rc3r.robots.rr3._batch``         shape handling of the closed-form functions
-``rc3r.robots.rr3.model``          closed-form M, S, g
-``rc3r.robots.rr3.regressor``      closed-form Slotine--Li and inverse-dynamics regressors
-``rc3r.robots.rr3.urdf``           URDF writer and reader with the DH structure checks
-``rc3r.robots.rr3.robot``          :class:`RR3`, the contract's implementation
-``rc3r.robots.rr3.engine``         the compiled closed-loop simulator
-``rc3r.robots.rr3.paper``          the paper's box, gains, trajectory, scenarios, claims
-``rc3r.robots.rr3.bench``          closed form vs Pinocchio, simulation timings
+=====================================  ==============================================================
+``rc3r``                               this public API
+``rc3r.robots``                        registry of robots: :func:`load_robot`, :data:`ROBOTS`
+``rc3r.robots.base``                   the robot contract :class:`Robot`: n, p, theta, Y(q, qd, v, a)
+``rc3r.robots.rr3``                    the paper's 3R arm (everything that names it)
+``rc3r.robots.rr3.params``             link parameters (paper convention), theta, Table 1
+``rc3r.robots.rr3.kernels``            compiled closed-form M, S, g, Y (numba)
+``rc3r.robots.rr3._batch``             shape handling of the closed-form functions
+``rc3r.robots.rr3.model``              closed-form M, S, g
+``rc3r.robots.rr3.regressor``          closed-form Slotine--Li and inverse-dynamics regressors
+``rc3r.robots.rr3.urdf``               URDF writer and reader with the DH structure checks
+``rc3r.robots.rr3.robot``              :class:`RR3`, the contract's implementation
+``rc3r.robots.rr3.engine``             the compiled closed-loop simulator
+``rc3r.robots.rr3.paper``              the paper's box, gains, trajectory, scenarios, claims
+``rc3r.robots.rr3.bench``              closed form vs Pinocchio, simulation timings
 ``rc3r.robots.rr3.bench_integrators``  Rosenbrock vs SciPy Radau/BDF on the same compiled loop
-``rc3r.robots.pinocchio``          :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
-``rc3r.robots.base_parameters``    numerical base parameters of a Pinocchio model
-``rc3r.robots.pinocchio_kernel``   compiled Slotine--Li regressor of a serial chain
-``rc3r.robots.pinocchio_bench``    ``rc3r bench``'s generic-robot section (UR5, Panda)
-``rc3r.controllers``               control laws u = Y theta_eff + w and their registry
-``rc3r.controllers._kernels``      compiled kernels of the built-in laws (generic over n, p)
-``rc3r.controllers.guarantee``     the robust laws' ultimate bound on |e_j| (Spong's UUB made explicit)
-``rc3r.trajectory``                desired trajectories (sines, quintic), compiled evaluation
-``rc3r.uncertainty``               parameter uncertainty (re-exports the three below)
-``rc3r.uncertainty.box``           boxes on standard parameters, box files, perturbed plants
-``rc3r.uncertainty.bounds``        theta_0 and rho: the paper's method, certified exact ranges
-``rc3r.uncertainty.payload``       exact bounds for an unknown payload on the last link
-``rc3r.uncertainty.sampled``       sampled lower bound on max ||theta - theta_0||
-``rc3r.simulate``                  :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
-``rc3r.simulate._fast``            the ``fast`` engine (a robot's compiled simulator)
-``rc3r.simulate._python``          the ``python`` and ``reference`` engines (any robot, any law)
-``rc3r.simulate.metrics``          scalar metrics of a run
-``rc3r.simulate.status``           status codes and the compiled bound check
-``rc3r.simulate.export``           a result as a table, CSV, figure, run directory
-``rc3r.study``                     a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
-``rc3r.campaign``                  many runs: Monte Carlo over the box, eps sweep, rate map
-``rc3r.campaign.jobs``             :class:`Job` (one run, picklable) and :func:`run_job` (its row)
-``rc3r.campaign.runner``           resumable row-by-row table, local process pool or Dask
-``rc3r.campaign.studies``          the campaigns' jobs, summaries, chattering classification
-``rc3r.campaign.figures``          the campaigns' figures
-``rc3r.campaign.bench``            campaign throughput with 1 and 2 workers (``rc3r bench``)
-``rc3r.verify``                    checks of a robot against Pinocchio
-``rc3r.plotting``                  figures (never switches the matplotlib backend)
-``rc3r.io``                        atomic file output (user's umask), TOML reading
-``rc3r.provenance``                versions, git commit, command line of an output
-``rc3r.errors``                    exception types (one-line errors on the command line)
-``rc3r.cli``                       the command line: the only place that parses, prints, exits
-``rc3r.cli.model``                 ``verify-model``, ``make-urdf``
-``rc3r.cli.bounds``                ``bounds``
-``rc3r.cli.run``                   ``run``, ``paper``
-``rc3r.cli.study``                 ``montecarlo``, ``sweep eps``, ``sweep rate``
-``rc3r.cli.bench``                 ``bench``
-``rc3r.cli._output``               output directories written as a whole, locked
-=================================  ==============================================================
+``rc3r.robots.pinocchio``              :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
+``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
+``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
+``rc3r.robots.pinocchio_bench``        ``rc3r bench``'s generic-robot section (UR5, Panda)
+``rc3r.controllers``                   control laws u = Y theta_eff + w and their registry
+``rc3r.controllers._kernels``          compiled kernels of the built-in laws (generic over n, p)
+``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
+``rc3r.trajectory``                    desired trajectories (sines, quintic), compiled evaluation
+``rc3r.uncertainty``                   parameter uncertainty (re-exports the three below)
+``rc3r.uncertainty.box``               boxes on standard parameters, box files, perturbed plants
+``rc3r.uncertainty.bounds``            theta_0 and rho: the paper's method, certified exact ranges
+``rc3r.uncertainty.payload``           exact bounds for an unknown payload on the last link
+``rc3r.uncertainty.sampled``           sampled lower bound on max ||theta - theta_0||
+``rc3r.simulate``                      :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
+``rc3r.simulate._fast``                the ``fast`` engine (a robot's compiled simulator)
+``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)
+``rc3r.simulate.metrics``              scalar metrics of a run
+``rc3r.simulate.status``               status codes and the compiled bound check
+``rc3r.simulate.export``               a result as a table, CSV, figure, run directory
+``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
+``rc3r.campaign``                      many runs: Monte Carlo over the box, eps sweep, rate map
+``rc3r.campaign.jobs``                 :class:`Job` (one run, picklable) and :func:`run_job` (its row)
+``rc3r.campaign.runner``               resumable row-by-row table, local process pool or Dask
+``rc3r.campaign.studies``              the campaigns' jobs, summaries, chattering classification
+``rc3r.campaign.figures``              the campaigns' figures
+``rc3r.campaign.bench``                campaign throughput with 1 and 2 workers (``rc3r bench``)
+``rc3r.verify``                        checks of a robot against Pinocchio
+``rc3r.plotting``                      figures (never switches the matplotlib backend)
+``rc3r.io``                            atomic file output (user's umask), TOML reading
+``rc3r.provenance``                    versions, git commit, command line of an output
+``rc3r.errors``                        exception types (one-line errors on the command line)
+``rc3r.cli``                           the command line: the only place that parses, prints, exits
+``rc3r.cli.model``                     ``verify-model``, ``make-urdf``
+``rc3r.cli.bounds``                    ``bounds``
+``rc3r.cli.run``                       ``run``, ``paper``
+``rc3r.cli.study``                     ``montecarlo``, ``sweep eps``, ``sweep rate``
+``rc3r.cli.bench``                     ``bench``
+``rc3r.cli._output``                   output directories written as a whole, locked
+=====================================  ==============================================================
 
 Conventions (units, frames, gravity, parameter orders): ``docs/conventions.md``.
 """

@@ -322,16 +322,18 @@ def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
     VerifyReport
         Checks, each over all samples (shapes per state in parentheses):
 
-        ``M_vs_crba``            M(q) (n,n) == crba (symmetrized)
-        ``S_vs_coriolis_matrix`` C(q, qd) (n,n) == computeCoriolisMatrix
-        ``Sqd_vs_rnea``          C qd (n,) == rnea(q, qd, 0) - g
-        ``g_vs_gravity``         g(q) (n,) == computeGeneralizedGravity
-        ``Y_theta_vs_rnea``      Y(q, qd, qd, qdd) theta (n,) == rnea(q, qd, qdd)
-        ``Ysl_theta_vs_pinocchio`` Y(q, qd, v, a) theta (n,) == M a + C v + g (Pinocchio)
-        ``skew_symmetry``        C + C^T (n,n) == dM/dt (:func:`mass_matrix_derivative`)
-        ``theta_least_squares``  lstsq of stacked Y (nN,p) against stacked rnea == theta (p,)
-        ``minimality``           :func:`check_minimality` on the first
-                                 :data:`MINIMALITY_STATES` states
+        ==========================  ==========================================================
+        ``M_vs_crba``               M(q) (n,n) == crba (symmetrized)
+        ``S_vs_coriolis_matrix``    C(q, qd) (n,n) == computeCoriolisMatrix
+        ``Sqd_vs_rnea``             C qd (n,) == rnea(q, qd, 0) - g
+        ``g_vs_gravity``            g(q) (n,) == computeGeneralizedGravity
+        ``Y_theta_vs_rnea``         Y(q, qd, qd, qdd) theta (n,) == rnea(q, qd, qdd)
+        ``Ysl_theta_vs_pinocchio``  Y(q, qd, v, a) theta (n,) == M a + C v + g (Pinocchio)
+        ``skew_symmetry``           C + C^T (n,n) == dM/dt (:func:`mass_matrix_derivative`)
+        ``theta_least_squares``     lstsq of stacked Y (nN,p) against stacked rnea == theta (p,)
+        ``minimality``              :func:`check_minimality` on the first
+                                    :data:`MINIMALITY_STATES` states
+        ==========================  ==========================================================
 
         The two identification checks use the same states as the others if
         ``samples >= MINIMALITY_STATES``, else :data:`MINIMALITY_STATES` states

@@ -18,7 +18,7 @@ __all__ = ["error_distribution", "error_vs_distance", "pareto", "stability_map"]
 
 
 def error_distribution(rows: list[dict], title: str) -> Figure:
-    """Fraction of plants whose max_j max_t |e_j| is at most x, per controller (log x)."""
+    """Fraction of plants whose ``max_j max_t |e_j|`` is at most x, per controller (log x)."""
     fig = Figure(figsize=(8, 4.8), constrained_layout=True)
     ax = fig.subplots()
     for c in sorted({r["controller"] for r in rows}):

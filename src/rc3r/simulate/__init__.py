@@ -27,7 +27,7 @@ law a compiled kernel, else ``python``; the result records the engine used.
 Stated accuracy (fast engine, defaults ``rtol = 1e-6``, ``atol = 1e-8``), against the
 reference engine (Radau, ``rtol = 1e-11``) on the paper's trajectory over 10 s: joint
 positions within 3e-6 rad, tracking error within 0.1 % of its maximum, torques within
-1 % of max |u|, for every controller (measured 2026-11-22: worst 2.8e-6 rad (PD),
+1 % of max ``|u|``, for every controller (measured 2026-11-22: worst 2.8e-6 rad (PD),
 2.7e-4 and 7.5e-3 (eq. 7); checked over 1.5 s by ``tests/test_simulate.py``). Sampled
 mode: positions within 1e-8 rad of the reference.
 

@@ -1,0 +1,96 @@
+"""The documentation's structure (no Sphinx needed; CI builds the HTML with -W in .ci/run).
+
+* the API reference lists every public name of ``rc3r`` and documents the main modules;
+* every ``docs/*.md`` page is in the table of contents (a glob catches new ones);
+* the notebook is stored without outputs (they come from executing it at build time) and
+  never selects a matplotlib backend other than the notebook's inline one;
+* the docs never point at ``../shared``.
+"""
+from __future__ import annotations
+
+import importlib
+import json
+import re
+from pathlib import Path
+
+import rc3r
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+#: Modules of the module map that the API reference must document (automodule with members).
+MAIN_MODULES = ("rc3r.robots", "rc3r.robots.base", "rc3r.controllers", "rc3r.trajectory", "rc3r.uncertainty.box",
+                "rc3r.uncertainty.bounds", "rc3r.simulate", "rc3r.study", "rc3r.campaign.jobs",
+                "rc3r.campaign.runner", "rc3r.plotting", "rc3r.verify", "rc3r.io", "rc3r.errors")
+
+
+def _resolve(dotted: str):
+    """The object named ``dotted`` (module path, then attributes)."""
+    parts = dotted.split(".")
+    for k in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        for attr in parts[k:]:
+            obj = getattr(obj, attr)
+        return obj
+    raise ImportError(dotted)
+
+
+def test_api_index_lists_every_public_name():
+    text = (DOCS / "api" / "index.rst").read_text()
+    assert ".. currentmodule:: rc3r" in text
+    entries = re.findall(r"^\s+~([\w.]+)\s*$", text, flags=re.M)
+    listed = {}
+    for entry in entries:
+        obj = _resolve("rc3r." + entry)
+        listed[entry.rsplit(".", 1)[-1]] = obj
+    public = [n for n in rc3r.__all__ if n != "__version__"]
+    missing = sorted(n for n in public if n not in listed)
+    assert not missing, f"docs/api/index.rst does not list {missing}"
+    for name in public:  # each entry is the object rc3r exports, at its defining module
+        assert listed[name] is getattr(rc3r, name), name
+
+
+def test_api_pages_document_the_main_modules():
+    pages = "\n".join(p.read_text() for p in (DOCS / "api").glob("*.rst"))
+    documented = re.findall(r"^\.\. automodule:: ([\w.]+)\s*$", pages, flags=re.M)
+    for mod in documented:
+        importlib.import_module(mod)
+    missing = sorted(set(MAIN_MODULES) - set(documented))
+    assert not missing, f"no API page documents {missing}"
+
+
+def test_every_markdown_page_is_in_the_toctree():
+    index = (DOCS / "index.md").read_text()
+    block = re.search(r"```\{toctree\}\n(.*?)```", index, flags=re.S)
+    assert block, "docs/index.md has no toctree"
+    lines = [ln.strip() for ln in block.group(1).splitlines()]
+    options = {ln for ln in lines if ln.startswith(":")}
+    entries = [ln for ln in lines if ln and not ln.startswith(":")]
+    for entry in entries:
+        if entry != "*":
+            assert any((DOCS / f"{entry}{ext}").is_file() for ext in (".md", ".rst", ".ipynb")), entry
+    if ":glob:" in options and "*" in entries:
+        return  # every top-level page, present or future
+    pages = {p.stem for p in DOCS.glob("*.md")} - {"index"}
+    assert not pages - set(entries), f"not in the toctree: {sorted(pages - set(entries))}"
+
+
+def test_notebooks_are_stored_without_outputs():
+    notebooks = sorted((DOCS / "notebooks").glob("*.ipynb"))
+    assert notebooks
+    for path in notebooks:
+        nb = json.loads(path.read_text())
+        for cell in nb["cells"]:
+            if cell["cell_type"] != "code":
+                continue
+            source = "".join(cell["source"])
+            assert not cell.get("outputs") and cell.get("execution_count") is None, f"{path.name}: outputs stored"
+            assert "matplotlib.use(" not in source and "MPLBACKEND" not in source, f"{path.name} forces a backend"
+
+
+def test_docs_do_not_point_at_shared():
+    for path in DOCS.rglob("*"):
+        if path.is_file() and "_build" not in path.parts and path.suffix in (".md", ".rst", ".py", ".ipynb"):
+            assert "../shared" not in path.read_text(), path
