@@ -16,3 +16,35 @@ def assert_close(x, ref, tol=TOL):
     err = np.max(np.abs(x - ref))
     scale = max(1.0, float(np.max(np.abs(ref))))
     assert err <= tol * scale, f"max abs err {err:.3e} > {tol:.0e} * {scale:.3g}"
+
+
+def named_arm(name: str):
+    """A named configuration of the 3R as ``SimpleNamespace(params, model)``.
+
+    * ``table1`` -- the committed ``urdf/rr3.urdf`` (the paper's Table 1: every length 1 m,
+      g0 = 9.81), loaded and checked by :func:`rc3r.robots.rr3.urdf.load_arm`;
+    * ``unequal`` -- lengths 0.8 / 1.3 / 0.6 m, g0 = 9.80665 m/s^2, off-diagonal inertia and
+      off-axis centres of mass: with l2 = 1 a term that drops or squares l2 is invisible, and
+      with Table 1's g0 a wrong gravity constant is.
+    """
+    from types import SimpleNamespace
+
+    from rc3r.robots.rr3.params import ArmParams, LinkParams, physical_issues
+    from rc3r.robots.rr3.urdf import REPO_URDF, load_arm, model_from_params
+
+    if name == "table1":
+        return load_arm(REPO_URDF)
+    if name != "unequal":
+        raise KeyError(name)
+    links = (
+        LinkParams(0.8, 7.0, (0.02, -0.3, 0.05), (0.35, 0.12, 0.30, 0.01, -0.02, 0.015)),
+        LinkParams(1.3, 4.5, (-0.6, 0.04, 0.07), (0.30, 0.42, 0.40, 0.02, 0.01, -0.03)),
+        LinkParams(0.6, 2.2, (-0.25, -0.03, 0.02), (0.05, 0.09, 0.08, -0.004, 0.006, 0.003)),
+    )
+    p = ArmParams(links, g0=9.80665, name="unequal")
+    assert physical_issues(p) == [], physical_issues(p)
+    return SimpleNamespace(params=p, model=model_from_params(p))
+
+
+#: Names of :func:`named_arm`, the parametrization of the model and regressor identity tests.
+NAMED_ARMS = ("table1", "unequal")

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from _helpers import TOL, assert_close  # noqa: E402  (tests/ is on sys.path under pytest)
+from _helpers import NAMED_ARMS, TOL, assert_close, named_arm  # noqa: E402  (tests/ is on sys.path)
 from rc3r.robots.rr3 import model as mdl
 from rc3r.robots.rr3 import regressor as reg
 from rc3r.robots.rr3.params import ArmParams, LinkParams, physical_issues, theta
@@ -26,6 +26,24 @@ from rc3r.robots.rr3.urdf import model_from_params  # make_urdf text -> Pinocchi
 #: warm-up would trip it), 25 robots per property.
 PROPERTY = settings(max_examples=25, deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow])
+
+# The identity tests run on every named configuration (tests/_helpers.py): Table 1, whose
+# l2 = 1 and g0 = 9.81 hide a dropped length or a wrong gravity constant, and an arm with
+# unequal links and another g0. These override conftest's session fixtures in this module.
+@pytest.fixture(scope="module", params=NAMED_ARMS)
+def arm(request):
+    return named_arm(request.param)
+
+
+@pytest.fixture(scope="module")
+def th(arm):
+    return theta(arm.params)
+
+
+@pytest.fixture(scope="module")
+def pdata(arm):
+    return arm.model.createData()
+
 
 
 
@@ -208,9 +226,9 @@ def test_inverse_dynamics_equals_regressor_times_theta_and_rnea(arm, th, pdata, 
 
     from rc3r.robots.rr3.regressor import inverse_dynamics, regressor
 
-    l2 = arm.params.lengths[1]
+    l2, g0 = arm.params.lengths[1], arm.params.g0
     Q, QD, QDD = rng.uniform(-3, 3, (3, 40, 3))
-    tau = inverse_dynamics(th, Q, QD, QDD, l2=l2)
-    np.testing.assert_allclose(tau, regressor(Q, QD, QDD, l2=l2) @ th, rtol=0, atol=1e-10)
+    tau = inverse_dynamics(th, Q, QD, QDD, l2=l2, g0=g0)
+    np.testing.assert_allclose(tau, regressor(Q, QD, QDD, l2=l2, g0=g0) @ th, rtol=0, atol=1e-10)
     ref = np.array([pin.rnea(arm.model, pdata, q, qd, qdd) for q, qd, qdd in zip(Q, QD, QDD)])
     np.testing.assert_allclose(tau, ref, rtol=0, atol=1e-10)

@@ -1,0 +1,296 @@
+"""Mutation testing of rc3r's core modules with cosmic-ray: how many deliberately broken
+versions of the code does the test suite notice?
+
+Usage (from the repository root, after ``pip install -e ".[test,mutation]"``)::
+
+    python tests/mutation/run.py                 # every group, ~1 h on 2 cores
+    python tests/mutation/run.py metrics bounds  # some groups
+    python tests/mutation/run.py --jobs 1        # one group at a time
+
+For each group (a set of modules and the tests that cover them, :data:`GROUPS`) it copies
+``src/``, ``tests/``, ``urdf/`` and ``pyproject.toml`` into ``out/mutation/<group>/``
+(the checkout is never mutated, so an interrupted run cannot leave a broken source file
+behind), writes a cosmic-ray config there, and runs ``cosmic-ray init``, the operator
+filter (:data:`EXCLUDED_OPERATORS`), the ``# pragma: no mutate`` filter, ``cosmic-ray
+baseline`` (the unmutated code must pass) and ``cosmic-ray exec``. The tests run with
+``NUMBA_DISABLE_JIT=1``: the compiled kernels then execute as the plain Python they are
+written in, so a mutant costs a test run (seconds) instead of a numba compilation
+(~20 s), and the mutated source is exactly what runs.
+
+Score = killed / (killed + survived); a timeout counts as killed (cosmic-ray's rule; the
+mutant made the tests hang). ``out/mutation/summary.json`` holds the counts per group and
+every survivor (file, line, operator, the mutated line), ``out/mutation/survivors.md``
+the same for reading. ``docs/testing.md`` reports the score and which survivors were
+judged equivalent (no test can tell them from the original, e.g. a changed tolerance
+factor ``1 + 1e-12``).
+"""
+from __future__ import annotations
+
+import argparse
+import concurrent.futures as cf
+import json
+import os
+import shutil
+import sqlite3
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+PY = sys.executable
+BIN = Path(PY).parent
+
+#: group -> (modules to mutate, pytest node ids that cover them). Each group's tests are the
+#: ones written against an independent source for those modules (Pinocchio, hand values).
+GROUPS = {
+    "model": (
+        ["src/rc3r/robots/rr3/kernels.py", "src/rc3r/robots/rr3/model.py", "src/rc3r/robots/rr3/regressor.py",
+         "src/rc3r/robots/rr3/params.py"],
+        ["tests/test_rr3_regressor.py::test_Y_theta_equals_rnea", "tests/test_rr3_model.py",
+         "tests/test_rr3_regressor.py", "tests/test_rr3_params.py",
+         "tests/test_rr3_robot.py::test_forward_dynamics_equals_aba"],
+    ),
+    "controllers": (
+        ["src/rc3r/controllers/__init__.py", "src/rc3r/controllers/_kernels.py",
+         "src/rc3r/controllers/guarantee.py"],
+        ["tests/test_controllers.py", "tests/test_guarantee.py"],
+    ),
+    "metrics": (
+        ["src/rc3r/simulate/metrics.py"],
+        ["tests/test_metrics.py"],
+    ),
+    "bounds": (
+        ["src/rc3r/uncertainty/bounds.py"],
+        ["tests/test_uncertainty.py", "tests/test_payload.py"],
+    ),
+}
+
+#: Fraction of each group's mutants that a default run tests (a seeded sample, the rest are
+#: marked "not sampled"): a full run of the model group (~1,400 mutants at ~4 s on a shared
+#: 2-core machine) takes hours; a uniform sample estimates the same score with a binomial
+#: standard error (printed). ``--sample 1`` tests every mutant.
+SAMPLE = {"model": 0.3, "controllers": 1.0, "metrics": 1.0, "bounds": 0.5}
+
+#: Mutants that a review of the suite found it did not notice (issue: "tests that fail when the
+#: code is wrong"), applied by hand with ``--named``: each must make its group's tests fail.
+#: (group, what, file, original text, mutated text)
+NAMED = [
+    ("controllers", "adaptive law ignores Gamma", "src/rc3r/controllers/_kernels.py",
+     "zdot[j] = -cp[s + j] * th_eff[j]", "zdot[j] = -th_eff[j]"),
+    ("metrics", "rms computed as a root sum of squares", "src/rc3r/simulate/metrics.py",
+     "np.sqrt((e ** 2).mean(axis=0))", "np.sqrt((e ** 2).sum(axis=0))"),
+    ("metrics", "chattering on the decimated stored grid in sampled mode", "src/rc3r/simulate/metrics.py",
+     "if res.tv_exact is not None:", "if False:"),
+    ("metrics", "final-error window of the last 0.5 s", "src/rc3r/simulate/metrics.py",
+     "res.t >= res.t[-1] - 1.0", "res.t >= res.t[-1] - 0.5"),
+    ("metrics", "final-error window open at its start", "src/rc3r/simulate/metrics.py",
+     "res.t >= res.t[-1] - 1.0", "res.t > res.t[-1] - 1.0"),
+    ("model", "gravity constant 9.8 instead of 9.81", "src/rc3r/robots/rr3/params.py",
+     "G0 = 9.81", "G0 = 9.8"),
+    ("model", "gravity term drops l2", "src/rc3r/robots/rr3/kernels.py",
+     "th[5] * s23) / l2", "th[5] * s23)"),
+    ("controllers", "robust law uses min(||xi||, eps)", "src/rc3r/controllers/_kernels.py",
+     "scale = cp[s] / max(nrm, cp[s + 1])", "scale = cp[s] / min(nrm, cp[s + 1])"),
+    ("bounds", "paper rho as the largest coefficient deviation, not the norm", "src/rc3r/uncertainty/bounds.py",
+     "rho=float(np.linalg.norm(th0 - th)),", "rho=float(np.max(np.abs(th0 - th))),"),
+]
+
+#: Operators left out, and why: bitwise/shift/modulo/floor-division replacements of float
+#: arithmetic only raise TypeError (caught by any test that runs the line, they inflate the
+#: score); removing a decorator removes ``@njit`` (equivalent with NUMBA_DISABLE_JIT) or
+#: ``@dataclass`` (caught at import); the variable inserter/replacer draw at random (not
+#: reproducible). What stays: + <-> -, * <-> /, + -> *, ** -> *, every comparison swap,
+#: unary operators, numbers (+1 / -1), True/False, and/or, ``not`` added to conditions,
+#: loops that run zero times, break/continue, exception types.
+EXCLUDED_OPERATORS = [
+    r"core/ReplaceBinaryOperator_\w+_(FloorDiv|Mod|RShift|LShift|BitOr|BitAnd|BitXor)$",
+    r"core/ReplaceBinaryOperator_(FloorDiv|Mod|RShift|LShift|BitOr|BitAnd|BitXor)_\w+$",
+    r"core/ReplaceBinaryOperator_(Add_Div|Add_Pow|Sub_Mul|Sub_Div|Sub_Pow|Mul_Sub|Mul_Pow|Div_Add|Div_Sub|Div_Pow|Pow_Add|Pow_Sub|Pow_Div)$",
+    r"core/RemoveDecorator",
+    r"core/VariableInserter",
+    r"core/VariableReplacer",
+]
+
+TIMEOUT_S = 120.0
+
+
+def _config(group: str) -> str:
+    modules, tests = GROUPS[group]
+    mods = ", ".join(f'"{m}"' for m in modules)
+    excl = ", ".join(f"'{e}'" for e in EXCLUDED_OPERATORS)
+    cmd = f"{PY} -m pytest -x -q -p no:cacheprovider " + " ".join(tests)
+    return (f'[cosmic-ray]\nmodule-path = [{mods}]\ntimeout = {TIMEOUT_S}\nexcluded-modules = []\n'
+            f'test-command = "{cmd}"\n\n[cosmic-ray.distributor]\nname = "local"\n\n'
+            f'[cosmic-ray.filters.operators-filter]\nexclude-operators = [{excl}]\n')
+
+
+def _copy_tree(dest: Path) -> None:
+    if dest.exists():
+        shutil.rmtree(dest)
+    dest.mkdir(parents=True)
+    ignore = shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc", ".hypothesis")
+    for name in ("src", "tests", "urdf"):
+        shutil.copytree(REPO / name, dest / name, ignore=ignore)
+    shutil.copy2(REPO / "pyproject.toml", dest / "pyproject.toml")
+
+
+def _run(cmd, cwd, env, log):
+    with open(log, "a") as fh:
+        fh.write(f"$ {' '.join(map(str, cmd))}\n")
+        fh.flush()
+        p = subprocess.run([str(c) for c in cmd], cwd=cwd, env=env, stdout=fh, stderr=subprocess.STDOUT)
+    if p.returncode != 0:
+        raise RuntimeError(f"{' '.join(map(str, cmd[:2]))} failed (exit {p.returncode}); see {log}")
+
+
+NOT_SAMPLED = "not sampled"
+
+
+def _sample(db: Path, fraction: float, seed: int) -> int:
+    """Keep a seeded uniform sample of ``fraction`` of the pending mutants; mark the rest skipped."""
+    import random
+
+    from cosmic_ray.work_db import use_db
+    from cosmic_ray.work_item import WorkerOutcome, WorkResult
+
+    with use_db(str(db)) as wdb:
+        ids = sorted(item.job_id for item in wdb.pending_work_items)
+        keep = set(random.Random(seed).sample(ids, round(fraction * len(ids)))) if fraction < 1 else set(ids)
+        for job in ids:
+            if job not in keep:
+                wdb.set_result(job, WorkResult(output=NOT_SAMPLED, worker_outcome=WorkerOutcome.SKIPPED))
+    return len(keep)
+
+
+def run_named(root: Path) -> list[dict]:
+    """Apply each of :data:`NAMED` to a fresh copy and run its group's tests: each must fail."""
+    out = []
+    for group, what, path, old, new in NAMED:
+        work = root / "named"
+        _copy_tree(work)
+        text = (work / path).read_text()
+        if old not in text:
+            raise RuntimeError(f"named mutant {what!r}: {old!r} not found in {path}")
+        (work / path).write_text(text.replace(old, new, 1))
+        env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(work / "src"), MPLBACKEND="Agg")
+        p = subprocess.run([PY, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *GROUPS[group][1]],
+                           cwd=work, env=env, capture_output=True, text=True)
+        failed = [ln.split(" ")[1] for ln in p.stdout.splitlines() if ln.startswith("FAILED ")]
+        out.append({"group": group, "mutant": what, "file": path, "killed": p.returncode != 0,
+                    "by": failed[0] if failed else None})
+        print(f"{'killed  ' if p.returncode else 'SURVIVED'} {what}  ({failed[0] if failed else '-'})", flush=True)
+    return out
+
+
+def _line(path: Path, lineno: int) -> str:
+    try:
+        return path.read_text().splitlines()[lineno - 1].strip()
+    except (OSError, IndexError):
+        return "?"
+
+
+def run_group(group: str, root: Path, fraction: float, seed: int) -> dict:
+    work = root / group
+    _copy_tree(work)
+    (work / "cosmic-ray.toml").write_text(_config(group))
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(work / "src"), MPLBACKEND="Agg",
+               PYTHONHASHSEED="0")
+    log = work / "cosmic-ray.log"
+    t0 = time.perf_counter()
+    db = work / "session.sqlite"
+    _run([BIN / "cosmic-ray", "init", "cosmic-ray.toml", db.name], work, env, log)
+    _run([BIN / "cr-filter-operators", db.name, "cosmic-ray.toml"], work, env, log)
+    _run([BIN / "cr-filter-pragma", db.name], work, env, log)
+    n_sampled = _sample(db, fraction, seed)
+    _run([BIN / "cosmic-ray", "baseline", "cosmic-ray.toml"], work, env, log)
+    _run([BIN / "cosmic-ray", "exec", "cosmic-ray.toml", db.name], work, env, log)
+    counts = {"killed": 0, "survived": 0, "incompetent": 0, "skipped": 0, "not_sampled": 0}
+    survivors = []
+    con = sqlite3.connect(db)
+    rows = con.execute(
+        "SELECT m.module_path, m.operator_name, m.occurrence, m.start_pos_row, r.worker_outcome, r.test_outcome, r.diff, "
+        "r.output "
+        "FROM mutation_specs m JOIN work_results r ON m.job_id = r.job_id").fetchall()
+    con.close()
+    for module, op, occ, row, worker, test, diff, output in rows:
+        worker, test = str(worker).lower(), str(test).lower()  # enum names or values
+        if worker == "skipped":
+            counts["not_sampled" if output == NOT_SAMPLED else "skipped"] += 1
+        elif worker in ("normal", "abnormal") and test in ("killed", "survived"):
+            counts[test] += 1
+            if test == "survived":
+                survivors.append({"module": module, "line": row, "operator": op, "occurrence": occ,
+                                  "source": _line(REPO / module, row), "diff": diff})
+        else:
+            counts["incompetent"] += 1
+    tested = counts["killed"] + counts["survived"]
+    score = counts["killed"] / tested if tested else float("nan")
+    return {"group": group, "modules": GROUPS[group][0], "tests": GROUPS[group][1], **counts,
+            "sample_fraction": fraction, "seed": seed, "score": score,
+            "score_stderr": (score * (1 - score) / tested) ** 0.5 if tested else float("nan"),
+            "wall_s": round(time.perf_counter() - t0, 1), "survivors": sorted(survivors, key=lambda s: (s["module"], s["line"]))}
+
+
+def _write(root: Path, results: list[dict]) -> None:
+    killed = sum(r["killed"] for r in results)
+    survived = sum(r["survived"] for r in results)
+    summary = {"groups": results, "killed": killed, "survived": survived,
+               "score": killed / (killed + survived) if killed + survived else float("nan"),
+               "excluded_operators": EXCLUDED_OPERATORS, "python": sys.version.split()[0],
+               "command": " ".join([Path(sys.argv[0]).name] + sys.argv[1:])}
+    tmp = root / "summary.json.tmp"
+    tmp.write_text(json.dumps(summary, indent=1))
+    tmp.replace(root / "summary.json")
+    lines = [f"# Mutation testing: {killed} killed, {survived} survived, score {summary['score']:.1%}", ""]
+    for r in results:
+        lines += [f"## {r['group']}: {r['killed']} killed, {r['survived']} survived, "
+                  f"{r['incompetent']} incompetent, {r['skipped']} filtered, {r['not_sampled']} not sampled "
+                  f"(seed {r['seed']}); score {r['score']:.1%} +- {r['score_stderr']:.1%} "
+                  f"({r['wall_s']:.0f} s)", ""]
+        lines += [f"- `{s['module']}:{s['line']}` {s['operator'].split('/')[-1]} #{s['occurrence']}: `{s['source']}`"
+                  for s in r["survivors"]]
+        lines.append("")
+    tmp = root / "survivors.md.tmp"
+    tmp.write_text("\n".join(lines))
+    tmp.replace(root / "survivors.md")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("groups", nargs="*", choices=[[]] + list(GROUPS), help="default: all")
+    ap.add_argument("--jobs", type=int, default=2, help="groups run side by side (default 2)")
+    ap.add_argument("--out", type=Path, default=REPO / "out" / "mutation")
+    ap.add_argument("--sample", type=float, default=None,
+                    help="fraction of each group's mutants to test (default: SAMPLE per group)")
+    ap.add_argument("--seed", type=int, default=20261123, help="seed of the sample (recorded)")
+    ap.add_argument("--named", action="store_true", help="only apply the NAMED mutants (a minute)")
+    a = ap.parse_args(argv)
+    groups = a.groups or list(GROUPS)
+    a.out.mkdir(parents=True, exist_ok=True)
+    if a.named:
+        named = run_named(a.out)
+        tmp = a.out / "named.json.tmp"
+        tmp.write_text(json.dumps(named, indent=1))
+        tmp.replace(a.out / "named.json")
+        return 0 if all(n["killed"] for n in named) else 1
+    results = []
+    with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+        futures = {pool.submit(run_group, g, a.out, SAMPLE[g] if a.sample is None else a.sample, a.seed): g
+                   for g in groups}
+        for fut in cf.as_completed(futures):
+            r = fut.result()
+            print(f"{r['group']}: {r['killed']} killed, {r['survived']} survived, score {r['score']:.1%} "
+                  f"+- {r['score_stderr']:.1%} (sample {r['sample_fraction']:g} of the mutants) "
+                  f"({r['wall_s']:.0f} s)", flush=True)
+            results.append(r)
+    results.sort(key=lambda r: groups.index(r["group"]))
+    _write(a.out, results)
+    total = sum(r["killed"] for r in results) + sum(r["survived"] for r in results)
+    print(f"total: {sum(r['killed'] for r in results)} of {total} mutants killed; "
+          f"survivors in {a.out / 'survivors.md'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
