@@ -124,7 +124,8 @@ def test_committed_urdf_has_a_visual_model_of_two_cylinders_per_link():
         assert shaft.geometry.radius == 0.05 and housing.geometry.radius == 0.075  # VISUAL_RADIUS x min(l) = 1 m
         M = gdata.oMg[2 * i + 1]
         h = shaft.geometry.halfLength
-        tips = sorted([M.act(np.array([0, 0, -h])), M.act(np.array([0, 0, h]))], key=lambda x: np.linalg.norm(x - ends[i]))
+        tips = sorted([M.act(np.array([0, 0, -h])), M.act(np.array([0, 0, h]))],
+                      key=lambda x: np.linalg.norm(x - ends[i]))
         np.testing.assert_allclose(tips[0], ends[i], atol=1e-12)
         np.testing.assert_allclose(tips[1], ends[i + 1], atol=1e-12)
         axis = data.oMi[i + 1].rotation[:, 2]  # joint i turns about its frame's z
