@@ -54,6 +54,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.campaign.bench``                campaign throughput with 1 and 2 workers (``rc3r bench``)
 ``rc3r.verify``                        checks of a robot against Pinocchio
 ``rc3r.plotting``                      figures (never switches the matplotlib backend)
+``rc3r.animation``                     the arm tracking its trajectory in 3D (Pinocchio FK), as a GIF
 ``rc3r.io``                            atomic file output (user's umask), TOML reading
 ``rc3r.provenance``                    versions, git commit, command line of an output
 ``rc3r.errors``                        exception types (one-line errors on the command line)

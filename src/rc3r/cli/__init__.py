@@ -148,6 +148,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--engine", choices=ENGINES, help="simulator (default auto: fast when compiled, else python)")
     r.add_argument("--out", help="output directory (default out/run/<name>, e.g. out/run/robust-perturbed)")
     r.add_argument("--force", action="store_true", help="replace an earlier result in --out")
+    r.add_argument("--animate", nargs="?", const="gif", choices=("gif", "mp4"),
+                   help="also write animation.gif (or .mp4, needs ffmpeg): the arm tracking its trajectory")
 
     pa = sub.add_parser("paper", help="the five scenarios of section 4, figures and summary")
     pa.add_argument("--out", default="out/paper", help="output directory (default out/paper)")

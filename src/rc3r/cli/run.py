@@ -10,7 +10,7 @@ from pathlib import Path
 
 
 from ..errors import ConfigError, DivergenceError
-from ..io import atomic_write_json, atomic_write_text, read_toml
+from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
@@ -48,16 +48,32 @@ def cmd_run(args) -> int:
     check_output_path(out)  # before anything is announced or simulated
     if out.is_dir() and any(out.iterdir()) and not args.force:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
+    fmt = getattr(args, "animate", None)
+    if fmt:
+        from ..animation import check_animatable, frame_count
+
+        check_animatable(spec.plant, fmt)  # before anything is announced or simulated
     announce_compile(spec.plant)
     _progress(f"rc3r run: {spec.name} on plant '{spec.plant.label}', {spec.options.mode}"
               f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
-              f"{spec.options.duration:g} s, engine {spec.options.engine} ...")
+              f"{spec.options.duration:g} s, engine {spec.options.engine}"
+              f"{f', then animation.{fmt} ({frame_count(spec.options.duration)} frames)' if fmt else ''} ...")
+    anim_interrupted = False
     with output_dir(out) as tmp:  # --out checked and locked before simulating
         res, m = execute(spec)
+        estimate = _estimate(spec, res, m)
+        if fmt and res.status != "interrupted":
+            anim_interrupted = not _animate(spec, res, m, tmp / f"animation.{fmt}", out)
         m["provenance"] = provenance(config=cfg, seed=spec.seed)
         res.save(tmp, m, spec.name)
+        if estimate is not None:
+            atomic_savefig(estimate, tmp / "estimate.png", dpi=110)
     if res.status == "interrupted":
         print(f"rc3r: {spec.name} {res.message}: written to {out}/ (metrics.json status 'interrupted')",
+              file=sys.stderr)
+        return EXIT["interrupted"]
+    if anim_interrupted:
+        print(f"rc3r: interrupted while writing the animation: the run is written to {out}/ without it",
               file=sys.stderr)
         return EXIT["interrupted"]
     print(f"{spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, final bound = {_fmt3(m['final_error_bound'])} rad, "
@@ -67,6 +83,41 @@ def cmd_run(args) -> int:
     except DivergenceError as exc:
         raise DivergenceError(f"{exc}; data up to then written to {out}/") from None
     return EXIT["ok"]
+
+
+def _estimate(spec, res, m: dict):
+    """The adaptive law's estimate against the plant's theta: ``m["parameter_estimate"]`` and the
+    figure (``None`` for the other laws)."""
+    from ..controllers import Adaptive
+
+    if not isinstance(spec.law, Adaptive) or res.z.shape[1] != spec.plant.p or res.t.size == 0:
+        return None
+    from ..plotting import ESTIMATE_UNITS, estimate_errors, estimate_figure
+
+    est = estimate_errors(res, spec.plant.theta)
+    m["parameter_estimate"] = {
+        "definition": "theta_hat(t) = the adaptive law's state; theta = the plant's coefficients (unknown to the law)",
+        "units": ESTIMATE_UNITS,
+        "error_initial": float(est["error"][0]), "error_final": float(est["error"][-1]),
+        "error_min": float(est["error"].min()), "moved_max": float(est["moved"].max()),
+        "theta_hat_final": [float(x) for x in res.z[-1]], "theta_plant": [float(x) for x in spec.plant.theta],
+    }
+    return estimate_figure(res, spec.plant.theta, f"{spec.name}: adaptive estimate on plant '{spec.plant.label}'",
+                           names=spec.plant.coefficient_names if spec.plant.p > 15 else None)
+
+
+def _animate(spec, res, m: dict, path: Path, out: Path) -> bool:
+    """Write the animation into the run directory; False if interrupted (the run is kept without it)."""
+    from ..animation import write_animation
+
+    _progress(f"rc3r run: writing the animation {out}/{path.name} ...")
+    try:
+        frames = write_animation(res, spec.plant, path, title=f"rc3r run {spec.name}")
+    except KeyboardInterrupt:
+        return False
+    m["animation"] = {"file": path.name, "frames": int(frames.t.size), "fps": frames.fps,
+                      "end_effector_frame": frames.frame, "t": [float(frames.t[0]), float(frames.t[-1])]}
+    return True
 
 
 def _table(rows: list[dict]) -> str:
@@ -90,7 +141,6 @@ def cmd_paper(args) -> int:
 
 def _theory_figures(res: dict, out: Path, mode: str, label: str) -> None:
     """FBL against robust per joint (ideal, perturbed) and ||Y^T r|| against eps."""
-    from ..io import atomic_savefig
     from ..plotting import boundary_layer_figure, comparison_figure
 
     for case in ("ideal", "perturbed"):
