@@ -255,7 +255,7 @@ def write_animation(res, robot, path, fps: float = FPS, max_frames: int = MAX_FR
     fig.set_dpi(dpi)
     if fmt == "gif":
         art = fig.rc3r_artists
-        writer = _blit_writer(fig, [art[k] for k in ("desired", "ee_path", "actual", "clock")])(fps=fps)
+        writer = _blit_writer(fig, [art[k] for k in ("ee_path", "actual", "desired", "clock")])(fps=fps)  # ghost on top
     else:
         writer = FFMpegWriter(fps=fps)  # full redraw per frame (matplotlib's own path)
     with atomic_path(path) as tmp:
