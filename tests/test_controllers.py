@@ -210,3 +210,94 @@ def test_a_law_in_plain_python_registers_and_runs():
             law.pack(2)
     finally:
         LAWS.pop("test-sat-pd", None)
+
+
+# ---- signals of every law, gain shapes, inertia-scaled gains --------------------------------
+
+
+@pytest.mark.parametrize("name", ["fbl", "pd", "robust", "robust-coeff", "adaptive"])
+def test_signals_of_every_law_against_their_formulas(name, rng):
+    """(v, a, r, w) on the toy robot with a moving reference, per law, against the module docstring:
+    FBL v = qd, a = qdd_d - Kd e_dot - Kp e, r = w = 0; PD v = a = r = 0, w = -Kp e - Kd e_dot;
+    sliding laws v = qd_d - Lambda e, a = qdd_d - Lambda e_dot, r = e_dot + Lambda e, w = -K r.
+    Gains differ per joint so a swapped index shows."""
+    gains = {"fbl": dict(Kp=[3.0, 5.0], Kd=[7.0, 11.0]), "pd": dict(Kp=[3.0, 5.0], Kd=[7.0, 11.0]),
+             "robust": dict(K=[3.0, 5.0], Lambda=[7.0, 11.0]),
+             "robust-coeff": dict(K=[3.0, 5.0], Lambda=[7.0, 11.0]),
+             "adaptive": dict(K=[3.0, 5.0], Lambda=[7.0, 11.0])}[name]
+    law = make_law(name, np.ones(4), rho=1.0, rho_i=np.ones(4), **gains)
+    q, qd = rng.uniform(-1, 1, (2, 2))
+    ref = rng.uniform(-1, 1, (3, 2))
+    e, ed = q - ref[0], qd - ref[1]
+    v, a, r, w = law.signals(q, qd, ref)
+    z = np.zeros(2)
+    if name == "fbl":
+        want = (qd, ref[2] - np.array([7.0, 11.0]) * ed - np.array([3.0, 5.0]) * e, z, z)
+    elif name == "pd":
+        want = (z, z, z, -np.array([3.0, 5.0]) * e - np.array([7.0, 11.0]) * ed)
+    else:
+        lam, k = np.array([7.0, 11.0]), np.array([3.0, 5.0])
+        want = (ref[1] - lam * e, ref[2] - lam * ed, ed + lam * e, -k * (ed + lam * e))
+    for got, exp, label in zip((v, a, r, w), want, "varw"):
+        np.testing.assert_allclose(got, exp, rtol=0, atol=1e-14, err_msg=label)
+
+
+@pytest.mark.parametrize("K", [[1.0, 2.0], [1.0, 2.0, 3.0, 4.0]], ids=["short", "long"])
+def test_a_gain_vector_of_the_wrong_length_is_refused_naming_the_sizes(K):
+    """A 2- or 4-vector K for a 3-joint robot: refused (never truncated or padded)."""
+    with pytest.raises(ParameterError, match=f"K has {len(K)} entries, the robot needs 3"):
+        Robust(np.ones(15), K=K).pack(3)
+
+
+def test_a_matrix_gain_is_refused_with_the_shape_expected():
+    with pytest.raises(ParameterError, match="K must be a number or 3 numbers, got shape"):
+        from rc3r.controllers import _array
+
+        _array("K", np.ones((3, 3)), size=3)
+    with pytest.raises(ParameterError, match=r"K must be a number or a vector, got shape \(3, 3\)"):
+        _array("K", np.ones((3, 3)))
+
+
+def test_theta_must_be_a_non_empty_vector_and_one_coefficient_is_fine():
+    with pytest.raises(ParameterError, match="non-empty vector"):
+        FeedbackLinearization(np.zeros(0))
+    with pytest.raises(ParameterError, match="theta must be a number or a vector"):
+        FeedbackLinearization(np.zeros((2, 2)))
+    assert FeedbackLinearization([2.0]).p == 1
+
+
+@pytest.mark.parametrize("p", [3, 5])
+def test_a_regressor_of_the_wrong_width_is_refused(p):
+    """A law with p coefficients on a robot whose Y is (2, 4): a one-line ParameterError, either way."""
+    with pytest.raises(ParameterError, match=r"has %d coefficients, the robot's regressor is \(2, 4\)" % p):
+        Robust(np.ones(p)).torque(_ToyRobot(), np.zeros(2), np.zeros(2), np.zeros((3, 2)))
+
+
+def test_laws_compare_by_identity_and_hash():
+    """Laws hold arrays, so they compare by identity (two equal-looking laws are distinct objects)
+    and can be set members or dict keys (the engines cache per law)."""
+    a, b = Robust(np.ones(15)), Robust(np.ones(15))
+    assert a == a and a != b and len({a, b, a}) == 2
+    for law in (RobustPerCoefficient(np.ones(15)), Adaptive(np.ones(15)), PDGravity(np.ones(15)),
+                FeedbackLinearization(np.ones(15))):
+        assert {law: 1}[law] == 1
+
+
+def test_robust_coeff_default_bounds_are_zero():
+    """Without rho_i, eq. 7 has no robust term (rho_i = 0): it is the nominal Slotine-Li law."""
+    law = RobustPerCoefficient(np.ones(15))
+    np.testing.assert_array_equal(np.broadcast_to(law.rho_i, (15,)), np.zeros(15))
+
+
+def test_inertia_scaled_gain_is_bandwidth_times_pinocchio_diag_M(arm, rng):
+    """K_i = b M_ii(q) with M from pinocchio.crba of the committed URDF (1e-9 relative)."""
+    import pinocchio as pin
+
+    from rc3r.controllers import inertia_scaled_gain
+
+    q = rng.uniform(-np.pi, np.pi, 3)
+    M = np.array(pin.crba(arm.model, arm.model.createData(), q), copy=True)
+    np.testing.assert_allclose(inertia_scaled_gain(RR3(arm.params), q, 40.0), 40.0 * np.diag(M), rtol=1e-9)
+    for bad in (0.0, -5.0, float("inf"), float("nan")):
+        with pytest.raises(ParameterError, match="bandwidth"):
+            inertia_scaled_gain(RR3(arm.params), q, bad)

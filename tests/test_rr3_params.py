@@ -156,3 +156,13 @@ def test_arm_params_vector_round_trip(table1, rng):
 def test_from_vector_wrong_shape_raises_parameter_error():
     with pytest.raises(ParameterError):
         ArmParams.from_vector(np.zeros(29), (1, 1, 1))
+
+
+@pytest.mark.parametrize("field, value", [("com", (0.1, 0.2)), ("com", (0.1, 0.2, 0.3, 0.4)),
+                                          ("inertia", (1.0,) * 5), ("inertia", (1.0,) * 7)])
+def test_link_vectors_of_the_wrong_length_are_refused(field, value):
+    """A CoM needs 3 numbers and an inertia 6: fewer or more is an error, never truncated."""
+    kw = dict(length=1.0, mass=1.0, com=(0.0, 0.0, 0.0), inertia=(1.0, 1.0, 1.0, 0.0, 0.0, 0.0))
+    kw[field] = value
+    with pytest.raises(ParameterError):
+        LinkParams(**kw)

@@ -243,3 +243,17 @@ def test_inverse_dynamics_equals_regressor_times_theta_and_rnea(arm, th, pdata, 
     np.testing.assert_allclose(tau, regressor(Q, QD, QDD, l2=l2, g0=g0) @ th, rtol=0, atol=1e-10)
     ref = np.array([pin.rnea(arm.model, pdata, q, qd, qdd) for q, qd, qdd in zip(Q, QD, QDD)])
     np.testing.assert_allclose(tau, ref, rtol=0, atol=1e-10)
+
+
+def test_single_state_gives_the_row_of_the_batch(arm, th, rng):
+    """inverse_dynamics, slotine_li_regressor and the model terms on one (3,) state return the
+    matching row of the batch call (shape (3,) / (3, 15) / (3, 3), not the batch's first row)."""
+    Q, QD, QDD, V, A = random_states(rng, 4)
+    l2, g0 = arm.params.lengths[1], arm.params.g0
+    tau = reg.inverse_dynamics(th, Q, QD, QDD, l2=l2, g0=g0)
+    Y = reg.slotine_li_regressor(Q, QD, V, A, l2=l2, g0=g0)
+    for k in (1, 3):
+        np.testing.assert_array_equal(reg.inverse_dynamics(th, Q[k], QD[k], QDD[k], l2=l2, g0=g0), tau[k])
+        np.testing.assert_array_equal(reg.slotine_li_regressor(Q[k], QD[k], V[k], A[k], l2=l2, g0=g0), Y[k])
+        np.testing.assert_array_equal(mdl.mass_matrix(th, Q[k]), mdl.mass_matrix(th, Q)[k])
+        np.testing.assert_array_equal(mdl.gravity(th, Q[k], l2=l2, g0=g0), mdl.gravity(th, Q, l2=l2, g0=g0)[k])

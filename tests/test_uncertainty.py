@@ -339,3 +339,27 @@ def test_perturb_simulable(table1):
     with pytest.raises(ParameterError) as e:  # Ixx2 = Iyy2 = 0.5 with Ixy2 = 1.2
         perturb(rr, box, "corner:" + "0" * 17 + "1" + "0" * 12, simulable=True)
     assert "not simulable" in _one_line(e)
+
+
+def test_linear_certified_bounds_of_a_pinocchio_arm(ur5, rng):
+    """For a Pinocchio arm theta = c + K std is linear, so the certified ranges are exact interval
+    arithmetic: every theta of 2000 random box members lies in [theta_lo, theta_hi] (1e-9 slack for
+    rounding of the O(10) kg m^2 sums), both ends are attained at the witnesses, rho_i is the half
+    width and theta_0 the centre -- checked with the robot's own base-parameter map, independently
+    of how the bounds were formed."""
+    names = ur5.standard_parameter_names
+    upper = np.zeros(len(names))
+    upper[[10 * k for k in range(len(names) // 10)]] = 0.5         # every mass -0.1 .. +0.5 kg
+    upper[[10 * k + 1 for k in range(len(names) // 10)]] = 0.05    # every m c_x +0.05 kg m
+    box = Box(-0.2 * upper, upper, names)
+    b = certified_bounds(ur5, box)
+    std = ur5.standard_parameters()
+    th = np.array([ur5.theta_of_standard(std + d) for d in box.sample(rng, 2000)])
+    slack = 1e-9 * max(1.0, np.abs(b.theta_hi).max())
+    assert np.all(th >= b.theta_lo - slack) and np.all(th <= b.theta_hi + slack)
+    for i in range(b.theta_lo.size):  # witness row i: the box member where theta_i is extremal
+        assert ur5.theta_of_standard(b.witness_lo[i])[i] == pytest.approx(b.theta_lo[i], abs=slack)
+        assert ur5.theta_of_standard(b.witness_hi[i])[i] == pytest.approx(b.theta_hi[i], abs=slack)
+    np.testing.assert_allclose(b.rho_i, 0.5 * (b.theta_hi - b.theta_lo), rtol=1e-15)
+    np.testing.assert_allclose(b.theta0, 0.5 * (b.theta_hi + b.theta_lo), rtol=1e-15)
+    assert b.rho == pytest.approx(np.linalg.norm(b.rho_i), rel=1e-12) and b.rho > 0

@@ -70,7 +70,7 @@ def _array(name, x, size=None) -> np.ndarray:
     except (TypeError, ValueError):
         raise ParameterError(f"{name} must be numbers, got {x!r}") from None
     if arr.ndim > 1 or (size is not None and arr.ndim == 1 and arr.size != size):
-        want = "a number" if size is None else f"a number or {size} numbers"
+        want = "a number or a vector" if size is None else f"a number or {size} numbers"
         raise ParameterError(f"{name} must be {want}, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f"{name} must be finite, got {arr.tolist()}")
