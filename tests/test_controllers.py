@@ -249,13 +249,15 @@ def test_a_gain_vector_of_the_wrong_length_is_refused_naming_the_sizes(K):
         Robust(np.ones(15), K=K).pack(3)
 
 
-def test_a_matrix_gain_is_refused_with_the_shape_expected():
-    with pytest.raises(ParameterError, match="K must be a number or 3 numbers, got shape"):
-        from rc3r.controllers import _array
-
-        _array("K", np.ones((3, 3)), size=3)
-    with pytest.raises(ParameterError, match=r"K must be a number or a vector, got shape \(3, 3\)"):
-        _array("K", np.ones((3, 3)))
+@pytest.mark.parametrize("K, message", [
+    (np.ones((3, 3)), r"K must be a number or a vector, got shape \(3, 3\)"),
+    ([1.0, [2.0, 3.0]], "K must be numbers"),          # ragged: numpy's ValueError, reworded
+    ([1.0, None, 2.0], "K must be finite"),            # None -> nan
+    ({"a": 1}, "K must be numbers"),                   # numpy's TypeError, reworded
+], ids=["matrix", "ragged", "none", "dict"])
+def test_malformed_gains_are_refused_with_one_line(K, message):
+    with pytest.raises(ParameterError, match=message):
+        Robust(np.ones(15), K=K)
 
 
 def test_theta_must_be_a_non_empty_vector_and_one_coefficient_is_fine():
@@ -263,6 +265,8 @@ def test_theta_must_be_a_non_empty_vector_and_one_coefficient_is_fine():
         FeedbackLinearization(np.zeros(0))
     with pytest.raises(ParameterError, match="theta must be a number or a vector"):
         FeedbackLinearization(np.zeros((2, 2)))
+    with pytest.raises(ParameterError, match="non-empty vector"):
+        FeedbackLinearization(2.0)  # a scalar is not a coefficient vector
     assert FeedbackLinearization([2.0]).p == 1
 
 
@@ -301,3 +305,41 @@ def test_inertia_scaled_gain_is_bandwidth_times_pinocchio_diag_M(arm, rng):
     for bad in (0.0, -5.0, float("inf"), float("nan")):
         with pytest.raises(ParameterError, match="bandwidth"):
             inertia_scaled_gain(RR3(arm.params), q, bad)
+
+
+def test_describe_is_json_ready_with_every_field():
+    """describe(): the registry name and every field, arrays as lists (json.dumps works)."""
+    import json
+
+    d = RobustPerCoefficient(np.array([1.0, 2.0]), rho_i=[0.5, 0.25], eps_i=0.1).describe()
+    assert d["name"] == "robust-coeff" and d["theta"] == [1.0, 2.0] and d["rho_i"] == [0.5, 0.25]
+    assert isinstance(d["K"], (float, list)) and json.loads(json.dumps(d)) == d
+
+
+def test_default_gains_of_eq7_and_diagnostic_of_fbl(table1):
+    """eq. 7's default eps_i is 0.5 per coefficient (docs/control.md's gain table); FBL and PD have
+    no sliding variable, so their diagnostic ||Y^T r|| is 0."""
+    law = RobustPerCoefficient(np.ones(15))
+    np.testing.assert_array_equal(np.broadcast_to(law.eps_i, (15,)), np.full(15, 0.5))
+    for c in (FeedbackLinearization(theta(table1)), PDGravity(theta(table1))):
+        _, _, diag = c.torque(RR3(table1), np.full(3, 0.1), np.full(3, 0.2), np.ones((3, 3)))
+        assert diag == 0.0
+
+
+def test_register_law_refuses_what_is_not_a_law():
+    class NotALaw:
+        name = "not-a-law"
+
+    for bad in (NotALaw, 5, Law):
+        with pytest.raises(TypeError, match="Law subclass with a name"):
+            register_law(bad)
+
+
+def test_apply_regressor_is_w_plus_Y_theta():
+    """The compiled engines' last step, u = w + Y theta_eff, by hand: Y = [[1, 2], [3, 4]],
+    theta = (10, 100), w = (0.5, -0.5) -> u = (210.5, 429.5)."""
+    from rc3r.controllers._kernels import apply_regressor
+
+    u = np.empty(2)
+    apply_regressor(np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([10.0, 100.0]), np.array([0.5, -0.5]), u)
+    np.testing.assert_array_equal(u, [210.5, 429.5])

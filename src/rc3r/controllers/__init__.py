@@ -60,7 +60,8 @@ __all__ = [
 ]
 
 
-def _array(name, x, size=None) -> np.ndarray:
+def _array(name, x) -> np.ndarray:
+    """``x`` as a float array of at most one dimension (the length is checked when n or p is known)."""
     items = x if isinstance(x, (list, tuple)) else [x]
     if any(isinstance(v, (bool, np.bool_, str)) for v in items) or \
             (isinstance(x, np.ndarray) and x.dtype.kind in "bUS"):  # True is not a gain of 1
@@ -69,9 +70,8 @@ def _array(name, x, size=None) -> np.ndarray:
         arr = np.array(x, dtype=float)
     except (TypeError, ValueError):
         raise ParameterError(f"{name} must be numbers, got {x!r}") from None
-    if arr.ndim > 1 or (size is not None and arr.ndim == 1 and arr.size != size):
-        want = "a number or a vector" if size is None else f"a number or {size} numbers"
-        raise ParameterError(f"{name} must be {want}, got shape {arr.shape}")
+    if arr.ndim > 1:
+        raise ParameterError(f"{name} must be a number or a vector, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f"{name} must be finite, got {arr.tolist()}")
     return arr
