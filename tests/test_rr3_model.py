@@ -359,3 +359,24 @@ def test_paper_printed_M_matrix_entries_11_and_33(arm, th, pdata, rng):
         (math.sin(q[1]), math.cos(q[2]), math.sin(q[1] + q[2]), math.cos(q[1] + q[2])) for q in Q))
     err33 = max(abs(th[5] * math.sin(q[2]) + th[6] * math.cos(q[2])) for q in Q)
     assert err11 > 1e-2 and err33 > 1e-2  # the fixed entries agree to 1e-9: the typos are visible
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-3], ids=["unit", "small"])
+def test_solve_spd3_equals_numpy_solve_and_flags_indefinite_matrices(scale, rng):
+    """The plant's 3x3 Cholesky solve: x == numpy.linalg.solve(M, b) (1e-12 relative, condition
+    numbers < 100) at every scale (a PD matrix of entries ~1e-3 is still PD), and False with x
+    untouched when any leading minor is not positive (the engines' "M not positive definite")."""
+    from rc3r.robots.rr3.kernels import solve_spd3
+
+    for _ in range(20):
+        A = rng.normal(size=(3, 3))
+        M = scale * (A @ A.T + 3.0 * np.eye(3))
+        b = rng.normal(size=3)
+        x = np.empty(3)
+        assert solve_spd3(M, b, x) is True
+        np.testing.assert_allclose(x, np.linalg.solve(M, b), rtol=1e-12, atol=0)
+    for bad in (np.diag([-1.0, 1.0, 1.0]), np.diag([1.0, 0.0, 1.0]), np.diag([1.0, 1.0, -1e-9]),
+                np.array([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]])):
+        x = np.full(3, 7.0)
+        assert solve_spd3(scale * bad, np.ones(3), x) is False
+        np.testing.assert_array_equal(x, np.full(3, 7.0))

@@ -153,9 +153,21 @@ def test_arm_params_vector_round_trip(table1, rng):
     assert p.lengths == (0.3, 0.4, 0.5) and p.g0 == 3.0 and p.name == "x"
 
 
-def test_from_vector_wrong_shape_raises_parameter_error():
+@pytest.mark.parametrize("shape", [(29,), (31,), (3, 10)])
+def test_from_vector_wrong_shape_raises_parameter_error(shape):
+    """from_vector needs exactly 30 numbers (10 per link): fewer, more or a matrix is an error."""
     with pytest.raises(ParameterError):
-        ArmParams.from_vector(np.zeros(29), (1, 1, 1))
+        ArmParams.from_vector(np.zeros(shape), (1, 1, 1))
+
+
+def test_parameters_are_immutable(table1):
+    """ArmParams and LinkParams are frozen: theta and the URDF computed from them cannot go stale."""
+    import dataclasses
+
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        table1.links[0].mass = 2.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        table1.g0 = 1.0
 
 
 @pytest.mark.parametrize("field, value", [("com", (0.1, 0.2)), ("com", (0.1, 0.2, 0.3, 0.4)),
