@@ -343,3 +343,72 @@ def test_apply_regressor_is_w_plus_Y_theta():
     u = np.empty(2)
     apply_regressor(np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([10.0, 100.0]), np.array([0.5, -0.5]), u)
     np.testing.assert_array_equal(u, [210.5, 429.5])
+
+
+def test_default_gains_are_the_documented_table():
+    """docs/control.md's gain table, by hand: FBL Kp = Kd = 100; the sliding laws K = 100,
+    Lambda = 50; robust eps = 0.5 and rho = 0 (no bound given: no robust term); eq. 7 eps_i = 0.5;
+    adaptive Gamma = 10; PD Kp = 500, Kd = 100."""
+    th = np.ones(15)
+    want = {FeedbackLinearization: dict(Kp=100.0, Kd=100.0), PDGravity: dict(Kp=500.0, Kd=100.0),
+            Robust: dict(K=100.0, Lambda=50.0, eps=0.5, rho=0.0),
+            RobustPerCoefficient: dict(K=100.0, Lambda=50.0, eps_i=0.5, rho_i=0.0),
+            Adaptive: dict(K=100.0, Lambda=50.0, Gamma=10.0)}
+    for cls, gains in want.items():
+        law = cls(th)
+        for k, v in gains.items():
+            assert np.all(np.asarray(getattr(law, k)) == v), (cls.__name__, k)
+
+
+def test_robust_scalars_refuse_vectors_and_make_law_takes_bounds_by_keyword():
+    with pytest.raises(ParameterError, match="rho must be one number"):
+        Robust(np.ones(15), rho=[1.0, 2.0])
+    with pytest.raises(ParameterError, match="eps must be one number"):
+        Robust(np.ones(15), eps=[0.5, 0.5])
+    with pytest.raises(TypeError):
+        make_law("robust", np.ones(15), 5.0)  # rho only by keyword: a positional number is an error
+
+
+def test_boolean_arrays_are_not_gains():
+    with pytest.raises(ParameterError, match="K must be numbers"):
+        Robust(np.ones(15), K=np.array([True, True, True]))
+    with pytest.raises(ParameterError, match="K must be numbers"):
+        Robust(np.ones(15), K=[100.0, True, 100.0])
+
+
+def test_packed_gains_are_read_only():
+    """A law is frozen, and so is its cached packed vector: a kernel cannot change the law's gains."""
+    cp = Robust(np.ones(15)).pack(3)
+    with pytest.raises(ValueError):
+        cp[0] = 2.0
+
+
+def test_eq7_each_coefficient_uses_its_own_eps(rng):
+    """Eq. 7 on the toy robot with eps_i spanning 1e-3..1e3, so some coefficients sit inside
+    their layer (linear) and others outside (saturated); a wrong eps index changes the torque."""
+    robot = _ToyRobot()
+    th = rng.uniform(-2, 2, 4)
+    rho_i, eps_i = np.array([1.0, 2.0, 3.0, 4.0]), np.array([1e-3, 1e3, 1e-2, 1e2])
+    c = RobustPerCoefficient(th, rho_i=rho_i, eps_i=eps_i, K=2.0, Lambda=3.0)
+    q, qd, qr, qdr, qddr = (rng.uniform(-1, 1, 2) for _ in range(5))
+    e, ed = q - qr, qd - qdr
+    r = ed + 3.0 * e
+    Y = robot.regressor(q, qd, qdr - 3.0 * e, qddr - 3.0 * ed)
+    xi = Y.T @ r
+    inside = np.abs(xi) < eps_i
+    assert inside.any() and (~inside).any()
+    u, _, _ = c.torque(robot, q, qd, np.array([qr, qdr, qddr]))
+    np.testing.assert_allclose(u, Y @ (th - rho_i * xi / np.maximum(np.abs(xi), eps_i)) - 2.0 * r, rtol=0, atol=1e-12)
+
+
+def test_inertia_scaled_gain_default_bandwidth_and_small_bandwidths():
+    """Default b = 50 1/s (docs/generic.md); any b > 0 is accepted, also below 1."""
+    from rc3r.controllers import inertia_scaled_gain
+
+    class Unit:
+        @staticmethod
+        def mass_matrix(q):
+            return np.diag([1.0, 2.0])
+
+    np.testing.assert_array_equal(inertia_scaled_gain(Unit(), np.zeros(2)), [50.0, 100.0])
+    np.testing.assert_array_equal(inertia_scaled_gain(Unit(), np.zeros(2), 0.5), [0.5, 1.0])

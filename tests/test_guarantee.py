@@ -87,3 +87,14 @@ def test_inertia_range_equals_the_eigenvalues_of_pinocchio_crba(arm, pdata, rng)
     lo, hi = inertia_range(rc3r.load_robot(), Q)
     assert lo == pytest.approx(ev[:, 0].min(), rel=1e-9) and hi == pytest.approx(ev[:, -1].max(), rel=1e-9)
     assert 0 < lo < hi
+
+
+def test_inertia_range_of_a_light_robot_below_one():
+    """Eigenvalues all below 1 kg m^2 (M = diag(0.2, 0.5) at q = 0, diag(0.1, 0.3) elsewhere):
+    the range is (0.1, 0.5), not clipped at an initial value."""
+    class Light:
+        @staticmethod
+        def mass_matrix(q):
+            return np.diag([0.2, 0.5]) if not np.any(q) else np.diag([0.1, 0.3])
+
+    assert inertia_range(Light(), np.array([[0.0, 0.0], [1.0, 0.0]])) == (0.1, 0.5)

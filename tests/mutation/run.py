@@ -202,9 +202,13 @@ def run_group(group: str, root: Path, fraction: float, seed: int) -> dict:
     _run([BIN / "cosmic-ray", "init", "cosmic-ray.toml", db.name], work, env, log)
     _run([BIN / "cr-filter-operators", db.name, "cosmic-ray.toml"], work, env, log)
     _run([BIN / "cr-filter-pragma", db.name], work, env, log)
-    n_sampled = _sample(db, fraction, seed)
+    _sample(db, fraction, seed)
     _run([BIN / "cosmic-ray", "baseline", "cosmic-ray.toml"], work, env, log)
     _run([BIN / "cosmic-ray", "exec", "cosmic-ray.toml", db.name], work, env, log)
+    return {**_results(group, db, fraction, seed), "wall_s": round(time.perf_counter() - t0, 1), "retested": None}
+
+
+def _results(group: str, db: Path, fraction: float, seed: int) -> dict:
     counts = {"killed": 0, "survived": 0, "incompetent": 0, "skipped": 0, "not_sampled": 0}
     survivors = []
     con = sqlite3.connect(db)
@@ -229,7 +233,41 @@ def run_group(group: str, root: Path, fraction: float, seed: int) -> dict:
     return {"group": group, "modules": GROUPS[group][0], "tests": GROUPS[group][1], **counts,
             "sample_fraction": fraction, "seed": seed, "score": score,
             "score_stderr": (score * (1 - score) / tested) ** 0.5 if tested else float("nan"),
-            "wall_s": round(time.perf_counter() - t0, 1), "survivors": sorted(survivors, key=lambda s: (s["module"], s["line"]))}
+            "survivors": sorted(survivors, key=lambda s: (s["module"], s["line"]))}
+
+
+def _same_tree(a: Path, b: Path) -> bool:
+    """True if the .py files under a and b are byte for byte the same."""
+    fa = {p.relative_to(a): p for p in a.rglob("*.py")}
+    fb = {p.relative_to(b): p for p in b.rglob("*.py")}
+    return fa.keys() == fb.keys() and all(fa[k].read_bytes() == fb[k].read_bytes() for k in fa)
+
+
+def retest_group(group: str, root: Path) -> dict:
+    """Run a finished session's survivors again against the current tests (the source must be
+    unchanged since the session was made): after tests were added for what survived."""
+    work = root / group
+    db = work / "session.sqlite"
+    if not db.exists():
+        raise RuntimeError(f"no session for {group} in {root}")
+    if not _same_tree(REPO / "src", work / "src"):
+        raise RuntimeError(f"{group}: the source changed since {root} was made; run it again instead")
+    shutil.rmtree(work / "tests")
+    shutil.copytree(REPO / "tests", work / "tests", ignore=shutil.ignore_patterns("__pycache__", ".hypothesis"))
+    prev = json.loads((root / "summary.json").read_text())
+    old = next(r for r in prev["groups"] if r["group"] == group)
+    con = sqlite3.connect(db)
+    n = con.execute("SELECT count(*) FROM work_results WHERE lower(test_outcome) = 'survived'").fetchone()[0]
+    con.execute("DELETE FROM work_results WHERE lower(test_outcome) = 'survived'")
+    con.commit()
+    con.close()
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(work / "src"), MPLBACKEND="Agg",
+               PYTHONHASHSEED="0")
+    t0 = time.perf_counter()
+    _run([BIN / "cosmic-ray", "exec", "cosmic-ray.toml", db.name], work, env, work / "cosmic-ray.log")
+    new = _results(group, db, old["sample_fraction"], old["seed"])
+    return {**new, "wall_s": old["wall_s"], "retested": {"survivors": n, "killed_now": n - new["survived"],
+                                                           "wall_s": round(time.perf_counter() - t0, 1)}}
 
 
 def _write(root: Path, results: list[dict]) -> None:
@@ -247,7 +285,9 @@ def _write(root: Path, results: list[dict]) -> None:
         lines += [f"## {r['group']}: {r['killed']} killed, {r['survived']} survived, "
                   f"{r['incompetent']} incompetent, {r['skipped']} filtered, {r['not_sampled']} not sampled "
                   f"(seed {r['seed']}); score {r['score']:.1%} +- {r['score_stderr']:.1%} "
-                  f"({r['wall_s']:.0f} s)", ""]
+                  f"({r['wall_s']:.0f} s)"
+                  + (f"; {r['retested']['survivors']} survivors re-tested with the current tests, "
+                     f"{r['retested']['killed_now']} now killed" if r.get("retested") else ""), ""]
         lines += [f"- `{s['module']}:{s['line']}` {s['operator'].split('/')[-1]} #{s['occurrence']}: `{s['source']}`"
                   for s in r["survivors"]]
         lines.append("")
@@ -265,6 +305,8 @@ def main(argv=None) -> int:
                     help="fraction of each group's mutants to test (default: SAMPLE per group)")
     ap.add_argument("--seed", type=int, default=20261123, help="seed of the sample (recorded)")
     ap.add_argument("--named", action="store_true", help="only apply the NAMED mutants (a minute)")
+    ap.add_argument("--retest", action="store_true",
+                    help="re-run the survivors of the sessions in --out against the current tests")
     a = ap.parse_args(argv)
     groups = a.groups or list(GROUPS)
     a.out.mkdir(parents=True, exist_ok=True)
@@ -275,9 +317,18 @@ def main(argv=None) -> int:
         tmp.replace(a.out / "named.json")
         return 0 if all(n["killed"] for n in named) else 1
     results = []
+    if a.retest:
+        prev = json.loads((a.out / "summary.json").read_text())
+        groups = a.groups or [r["group"] for r in prev["groups"]]
+        results = [r for r in prev["groups"] if r["group"] not in groups]
+        a.groups, todo = groups, groups
+        groups = [r["group"] for r in prev["groups"]]
+    else:
+        todo = groups
+    fn = retest_group if a.retest else (lambda g, out: run_group(g, out, SAMPLE[g] if a.sample is None else a.sample,
+                                                                 a.seed))
     with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
-        futures = {pool.submit(run_group, g, a.out, SAMPLE[g] if a.sample is None else a.sample, a.seed): g
-                   for g in groups}
+        futures = {pool.submit(fn, g, a.out): g for g in todo}
         for fut in cf.as_completed(futures):
             r = fut.result()
             print(f"{r['group']}: {r['killed']} killed, {r['survived']} survived, score {r['score']:.1%} "
