@@ -18,10 +18,10 @@ REL = 1e-12
 
 T = np.array([0.0, 0.5, 1.0, 1.5, 2.0])  # [s], t_end = 2 s
 E = np.array([[0.5, 0.0],                # e = q - q_d [rad]; the error at t = 1.0 s (-0.4) is the
-              [0.3, -0.1],               # largest of joint 1 in the last second, so a window of
-              [-0.4, 0.1],               # t > T - 1 (0.2), T - 0.5 (0.2) or the whole run (0.5)
-              [0.1, -0.3],               # each gives another number than t >= T - 1 (0.4)
-              [0.2, 0.05]])
+              [0.45, -0.1],              # largest of joint 1 in the last second, so a window of
+              [-0.4, 0.1],               # t > T - 1 (0.2), T - 0.5 (0.2), t >= 0.5 (0.45) or the
+              [0.1, -0.3],               # whole run (0.5) each gives another number than
+              [0.2, 0.05]])              # t >= T - 1 (0.4)
 U = np.array([[1.0, 0.0],                # u [N m]
               [3.0, 0.0],
               [-2.0, 5.0],
@@ -54,10 +54,10 @@ def test_max_abs_error_is_the_largest_absolute_error_per_joint():
 
 
 def test_rms_error_is_the_root_of_the_mean_square():
-    """joint 1: (0.25 + 0.09 + 0.16 + 0.01 + 0.04) / 5 = 0.11 -> sqrt 0.3316...;
+    """joint 1: (0.25 + 0.2025 + 0.16 + 0.01 + 0.04) / 5 = 0.1325 -> sqrt 0.364...;
     joint 2: (0 + 0.01 + 0.01 + 0.09 + 0.0025) / 5 = 0.0225 -> 0.15."""
     got = run_metrics(fake_run())["rms_error"]
-    assert got == pytest.approx([np.sqrt(0.11), 0.15], rel=REL)
+    assert got == pytest.approx([np.sqrt(0.1325), 0.15], rel=REL)
 
 
 def test_final_error_bound_is_the_max_over_the_last_second_inclusive():
@@ -89,6 +89,34 @@ def test_boundary_layer_of_the_robust_law():
     median (0.6 + 1.2) / 2 = 0.9, max 1.8, outside (> 1) two rows of four."""
     bl = run_metrics(fake_run())["boundary_layer"]
     assert bl == pytest.approx({"median": 0.9, "max": 1.8, "outside": 0.5}, rel=REL)
+
+
+def test_boundary_layer_edge_is_inside_and_one_row_is_enough():
+    """||Y^T r|| == eps is on the layer's edge, inside (eq. 6 uses max(||xi||, eps)): [0.5, 0.25, 1.0] / 0.5
+    = [1, 0.5, 2] -> outside 1/3 (one strictly above 1), median 1, max 2. A run with one row after
+    t = 0 has its layer; a run with only t = 0 has none."""
+    r = fake_run(yt_r_norm=np.array([0.0, 0.5, 0.25, 1.0, 0.0]))
+    r.yt_r_norm = r.yt_r_norm[:4]
+    bl = run_metrics(r)["boundary_layer"]
+    assert bl == pytest.approx({"median": 1.0, "max": 2.0, "outside": 1 / 3}, rel=REL)
+    two = fake_run(yt_r_norm=np.array([0.0, 0.75]))
+    assert run_metrics(two)["boundary_layer"] == pytest.approx({"median": 1.5, "max": 1.5, "outside": 1.0}, rel=REL)
+    assert run_metrics(fake_run(yt_r_norm=np.array([0.0])))["boundary_layer"] is None
+
+
+def test_short_runs_and_one_joint():
+    """A 2-row run of 0.5 s: chattering |u(0.5) - u(0)| / 0.5 = 4 N m/s on joint 1 (not divided by 1 s
+    and not dropped); its last-second window is the whole run. A one-joint robot gets its total
+    variation too: |3-1| + |-2-3| + 0 + |0+2| = 9 N m over 2 s."""
+    r = fake_run()
+    r.t, r.q, r.q_des, r.u, r.t_end = T[:2], r.q[:2], r.q_des[:2], U[:2], 0.5
+    m = run_metrics(r)
+    assert m["chattering"] == pytest.approx([4.0, 0.0], rel=REL)
+    assert m["final_error_bound"] == pytest.approx([0.5, 0.1], rel=REL)
+    one = fake_run()
+    one.q, one.q_des, one.u = one.q[:, :1], one.q_des[:, :1], U[:, :1]
+    m1 = run_metrics(one)
+    assert m1["chattering"] == pytest.approx([4.5], rel=REL) and m1["max_abs_error"] == pytest.approx([0.5], rel=REL)
 
 
 def test_boundary_layer_absent_without_a_scalar_eps():
