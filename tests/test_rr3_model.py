@@ -375,7 +375,7 @@ def test_solve_spd3_equals_numpy_solve_and_flags_indefinite_matrices(scale, rng)
         x = np.empty(3)
         assert solve_spd3(M, b, x) is True
         np.testing.assert_allclose(x, np.linalg.solve(M, b), rtol=1e-12, atol=0)
-    for bad in (np.diag([-1.0, 1.0, 1.0]), np.diag([1.0, 0.0, 1.0]), np.diag([1.0, 1.0, -1e-9]),
+    for bad in (np.diag([-1.0, 1.0, 1.0]), np.diag([0.0, 1.0, 1.0]), np.diag([1.0, 0.0, 1.0]), np.diag([1.0, 1.0, -1e-9]),
                 np.array([[1.0, 2.0, 0.0], [2.0, 1.0, 0.0], [0.0, 0.0, 1.0]])):
         x = np.full(3, 7.0)
         assert solve_spd3(scale * bad, np.ones(3), x) is False

@@ -1,6 +1,8 @@
 """rc3r.robots.rr3.params: Table 1 -> Table 2, theta broadcasting, physical checks, TOML loading."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -178,3 +180,44 @@ def test_link_vectors_of_the_wrong_length_are_refused(field, value):
     kw[field] = value
     with pytest.raises(ParameterError):
         LinkParams(**kw)
+
+
+@pytest.mark.parametrize("mass", [0.0, -0.5])
+def test_zero_or_slightly_negative_mass_is_an_issue_of_that_link(mass):
+    """On an otherwise consistent arm (tests/_helpers.py's "unequal"), the one issue is link 3's mass."""
+    from _helpers import named_arm
+
+    links = list(named_arm("unequal").params.links)
+    links[2] = LinkParams(1.0, mass, (0, 0, 0), (1, 1, 1, 0, 0, 0))
+    issues = physical_issues(ArmParams(tuple(links)))
+    assert len(issues) == 1 and issues[0].startswith("link 3: mass")
+
+
+def test_inertia_singular_relative_to_its_size_is_an_issue():
+    """Principal moments (1e-9, 1e3, 1e3) kg m^2: positive, but 1e-12 of the largest -- numerically
+    singular (the test is relative to the largest moment, not to 1 kg m^2)."""
+    from _helpers import named_arm
+
+    links = list(named_arm("unequal").params.links)
+    links[1] = LinkParams(1.0, 1.0, (0, 0, 0), (1e-9, 1e3, 1e3, 0, 0, 0))
+    issues = physical_issues(ArmParams(tuple(links)))
+    assert len(issues) == 1 and issues[0].startswith("link 2: inertia is not positive definite")
+
+
+@pytest.mark.parametrize("length", [0.0, -1.0])
+def test_non_positive_link_length_is_refused_naming_the_link(table1, length):
+    links = list(table1.links)
+    links[1] = LinkParams(length, 1.0, (0, 0, 0), (1, 1, 1, 0, 0, 0))
+    with pytest.raises(ParameterError, match="link 2 length must be > 0"):
+        ArmParams(tuple(links))
+
+
+def test_a_bad_link_in_a_parameter_file_is_named(tmp_path):
+    """The parameter file's links are numbered from 1 in messages (the second [[link]] is link 2)."""
+    src = (Path(__file__).resolve().parents[1] / "src/rc3r/robots/rr3/data/rr3.toml").read_text()
+    parts = src.split("[[link]]")
+    parts[2] = parts[2].replace(", iyz = 0.2 }", " }", 1)
+    f = tmp_path / "p.toml"
+    f.write_text("[[link]]".join(parts))
+    with pytest.raises(ConfigError, match="link 2 inertia lacks iyz"):
+        load_params(f)

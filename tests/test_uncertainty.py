@@ -363,3 +363,25 @@ def test_linear_certified_bounds_of_a_pinocchio_arm(ur5, rng):
     np.testing.assert_allclose(b.rho_i, 0.5 * (b.theta_hi - b.theta_lo), rtol=1e-15)
     np.testing.assert_allclose(b.theta0, 0.5 * (b.theta_hi + b.theta_lo), rtol=1e-15)
     assert b.rho == pytest.approx(np.linalg.norm(b.rho_i), rel=1e-12) and b.rho > 0
+
+
+def test_bounds_are_frozen_and_say_what_rho_covers(table1, cert):
+    """Bounds is immutable; its dict says the paper's rho covers the nominal robot only (with the
+    inertia keys and theta_upper it used) and the certified rho the whole box."""
+    import dataclasses
+
+    paper = paper_bounds(RR3(table1), paper_box())
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        paper.rho = 1.0
+    dp, dc = paper.to_dict(), cert.to_dict()
+    assert dp["rho_covers"].startswith("the nominal robot only") and dp["inertia_keys"] == ["iyy", "izz"]
+    assert len(dp["theta_upper"]) == 15
+    assert dc["rho_covers"].startswith("the whole box") and "theta_upper" not in dc and "inertia_keys" not in dc
+
+
+@pytest.mark.parametrize("size", [14, 16])
+def test_certified_radius_refuses_a_theta0_of_the_wrong_size(cert, size):
+    from rc3r.uncertainty import certified_radius
+
+    with pytest.raises(ParameterError, match="theta0 needs 15 finite entries"):
+        certified_radius(cert, np.zeros(size))
