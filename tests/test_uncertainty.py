@@ -67,9 +67,12 @@ def test_text_reading_all_inertia_entries_gives_another_table(table1):
     assert b.rho == pytest.approx(186.0811, abs=5e-5)
 
 
-def test_paper_inertia_keys_validated(table1):
-    with pytest.raises(ConfigError) as e:
-        paper_bounds(RR3(table1), paper_box(), inertia_keys=("iyy", "Iqq"))
+@pytest.mark.parametrize("keys", [("iyy", "Iqq"), ("rcz",), ("m",), "aaa", ""], ids=["typo", "com", "mass", "aaa", "empty"])
+def test_paper_inertia_keys_validated(table1, keys):
+    """Only inertia entries (ixx .. iyz) or "all": a CoM coordinate or the mass is not an inertia key,
+    and no other string means "all"."""
+    with pytest.raises(ConfigError, match="unknown inertia entries") as e:
+        paper_bounds(RR3(table1), paper_box(), inertia_keys=keys)
     _one_line(e)
 
 
