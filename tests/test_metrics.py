@@ -147,3 +147,10 @@ def test_a_run_stopped_at_t0_has_nan_errors_not_a_crash():
     for key in ("max_abs_error", "rms_error", "final_error_bound", "max_abs_torque"):
         assert np.isnan(m[key]).all() and len(m[key]) == 2, key
     assert m["chattering"] == [0.0, 0.0] and m["boundary_layer"] is None
+
+
+def test_a_sampled_run_stopped_at_t0_has_zero_chattering_not_nan():
+    """A sampled run that diverged at its first sample (t_end = 0, one row, tv_exact = 0): 0 N m/s."""
+    r = fake_run(mode="sampled", tv_exact=np.zeros(2), rate=1000.0)
+    r.t, r.q, r.q_des, r.u, r.t_end = T[:1], r.q[:1], r.q_des[:1], U[:1], 0.0
+    assert run_metrics(r)["chattering"] == [0.0, 0.0]

@@ -221,3 +221,14 @@ def test_a_bad_link_in_a_parameter_file_is_named(tmp_path):
     f.write_text("[[link]]".join(parts))
     with pytest.raises(ConfigError, match="link 2 inertia lacks iyz"):
         load_params(f)
+
+
+def test_near_singular_inertia_is_judged_against_its_largest_moment():
+    """Principal moments (1e-10, 1, 1e3) kg m^2: the smallest is 1e-13 of the largest, so the inertia
+    is numerically singular ("not positive definite"), whatever the middle moment."""
+    from _helpers import named_arm
+
+    links = list(named_arm("unequal").params.links)
+    links[0] = LinkParams(1.0, 1.0, (0, 0, 0), (1e-10, 1.0, 1e3, 0, 0, 0))
+    issues = physical_issues(ArmParams(tuple(links)))
+    assert len(issues) == 1 and issues[0].startswith("link 1: inertia is not positive definite")

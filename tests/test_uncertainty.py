@@ -388,3 +388,27 @@ def test_certified_radius_refuses_a_theta0_of_the_wrong_size(cert, size):
 
     with pytest.raises(ParameterError, match="theta0 needs 15 finite entries"):
         certified_radius(cert, np.zeros(size))
+
+
+def test_structure_of_a_robot_with_a_constant_term(rng):
+    """The decomposition theta(v) = const + m (a + b.r + r^T Q r) + C I, extracted from evaluations
+    only, reproduces a synthetic one-body robot whose theta has a constant term (the 3R's has
+    none), for one standard-parameter vector (10,) and for a batch (5, 10)."""
+    c0, a0 = rng.normal(size=4), rng.normal(size=4)
+    b0, C0 = rng.normal(size=(4, 3)), rng.normal(size=(4, 6))
+    A = rng.normal(size=(4, 3, 3))
+    Q0 = A + A.transpose(0, 2, 1)
+
+    class Synthetic:
+        standard_parameter_names = tuple(f"x{i}" for i in range(10))
+
+        @staticmethod
+        def theta_of_standard(v):
+            m, r, inertia = v[0], v[1:4], v[4:10]
+            return c0 + m * (a0 + b0 @ r + np.einsum("j,ijl,l->i", r, Q0, r)) + C0 @ inertia
+
+    S = _structure(Synthetic())
+    V = rng.normal(size=(5, 10))
+    want = np.array([Synthetic.theta_of_standard(v) for v in V])
+    np.testing.assert_allclose(S.evaluate(V), want, rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(S.evaluate(V[2]), want[2], rtol=1e-10, atol=1e-10)
