@@ -48,3 +48,26 @@ def named_arm(name: str):
 
 #: Names of :func:`named_arm`, the parametrization of the model and regressor identity tests.
 NAMED_ARMS = ("table1", "unequal")
+
+
+# Fixtures over the named configurations, for the identity tests: a test module that imports them
+# (``from _helpers import arm, th, pdata``) runs each test on every arm of NAMED_ARMS; they override
+# conftest's session-scoped Table 1 fixtures of the same names in that module only.
+import pytest  # noqa: E402
+
+
+@pytest.fixture(scope="module", params=NAMED_ARMS)
+def arm(request):
+    return named_arm(request.param)
+
+
+@pytest.fixture(scope="module")
+def th(arm):
+    from rc3r.robots.rr3.params import theta
+
+    return theta(arm.params)
+
+
+@pytest.fixture(scope="module")
+def pdata(arm):
+    return arm.model.createData()

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from _helpers import NAMED_ARMS, TOL, assert_close, named_arm  # noqa: E402  (tests/ is on sys.path)
+from _helpers import TOL, arm, assert_close, pdata, th  # noqa: E402, F401  (fixtures: the named arms)
 from rc3r.robots.rr3 import model as mdl
 from rc3r.robots.rr3 import regressor as reg
 from rc3r.robots.rr3.params import ArmParams, LinkParams, physical_issues, theta
@@ -27,22 +27,8 @@ from rc3r.robots.rr3.urdf import model_from_params  # make_urdf text -> Pinocchi
 PROPERTY = settings(max_examples=25, deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow])
 
-# The identity tests run on every named configuration (tests/_helpers.py): Table 1, whose
-# l2 = 1 and g0 = 9.81 hide a dropped length or a wrong gravity constant, and an arm with
-# unequal links and another g0. These override conftest's session fixtures in this module.
-@pytest.fixture(scope="module", params=NAMED_ARMS)
-def arm(request):
-    return named_arm(request.param)
-
-
-@pytest.fixture(scope="module")
-def th(arm):
-    return theta(arm.params)
-
-
-@pytest.fixture(scope="module")
-def pdata(arm):
-    return arm.model.createData()
+# The identity tests run on every named configuration (tests/_helpers.py): these
+# module-scoped arm, th, pdata override conftest's Table 1 fixtures in this module.
 
 
 
