@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 #: Relative tolerance of the model identities: float64 rounding of O(100) products of
 #: magnitudes <= O(1e3) gives ~1e-13 relative; 1e-9 leaves four orders of margin and still
@@ -53,9 +54,6 @@ NAMED_ARMS = ("table1", "unequal")
 # Fixtures over the named configurations, for the identity tests: a test module that imports them
 # (``from _helpers import arm, th, pdata``) runs each test on every arm of NAMED_ARMS; they override
 # conftest's session-scoped Table 1 fixtures of the same names in that module only.
-import pytest  # noqa: E402
-
-
 @pytest.fixture(scope="module", params=NAMED_ARMS)
 def arm(request):
     return named_arm(request.param)

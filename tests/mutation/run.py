@@ -37,6 +37,8 @@ import sys
 import time
 from pathlib import Path
 
+from rc3r.io import atomic_write_json, atomic_write_text
+
 REPO = Path(__file__).resolve().parents[2]
 PY = sys.executable
 BIN = Path(PY).parent
@@ -135,6 +137,12 @@ def _copy_tree(dest: Path) -> None:
     shutil.copy2(REPO / "pyproject.toml", dest / "pyproject.toml")
 
 
+def _env(work: Path) -> dict:
+    """The tests' environment: the copy's sources, kernels as plain Python, no display, fixed hashing."""
+    return dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(work / "src"), MPLBACKEND="Agg",
+                PYTHONHASHSEED="0")
+
+
 def _run(cmd, cwd, env, log):
     with open(log, "a") as fh:
         fh.write(f"$ {' '.join(map(str, cmd))}\n")
@@ -173,9 +181,8 @@ def run_named(root: Path) -> list[dict]:
         if old not in text:
             raise RuntimeError(f"named mutant {what!r}: {old!r} not found in {path}")
         (work / path).write_text(text.replace(old, new, 1))
-        env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(work / "src"), MPLBACKEND="Agg")
         p = subprocess.run([PY, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *GROUPS[group][1]],
-                           cwd=work, env=env, capture_output=True, text=True)
+                           cwd=work, env=_env(work), capture_output=True, text=True)
         failed = [ln.split(" ")[1] for ln in p.stdout.splitlines() if ln.startswith("FAILED ")]
         out.append({"group": group, "mutant": what, "file": path, "killed": p.returncode != 0,
                     "by": failed[0] if failed else None})
@@ -194,8 +201,7 @@ def run_group(group: str, root: Path, fraction: float, seed: int) -> dict:
     work = root / group
     _copy_tree(work)
     (work / "cosmic-ray.toml").write_text(_config(group))
-    env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(work / "src"), MPLBACKEND="Agg",
-               PYTHONHASHSEED="0")
+    env = _env(work)
     log = work / "cosmic-ray.log"
     t0 = time.perf_counter()
     db = work / "session.sqlite"
@@ -213,8 +219,8 @@ def _results(group: str, db: Path, fraction: float, seed: int) -> dict:
     survivors = []
     con = sqlite3.connect(db)
     rows = con.execute(
-        "SELECT m.module_path, m.operator_name, m.occurrence, m.start_pos_row, r.worker_outcome, r.test_outcome, r.diff, "
-        "r.output "
+        "SELECT m.module_path, m.operator_name, m.occurrence, m.start_pos_row, "
+        "r.worker_outcome, r.test_outcome, r.diff, r.output "
         "FROM mutation_specs m JOIN work_results r ON m.job_id = r.job_id").fetchall()
     con.close()
     for module, op, occ, row, worker, test, diff, output in rows:
@@ -261,10 +267,8 @@ def retest_group(group: str, root: Path) -> dict:
     con.execute("DELETE FROM work_results WHERE lower(test_outcome) = 'survived'")
     con.commit()
     con.close()
-    env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(work / "src"), MPLBACKEND="Agg",
-               PYTHONHASHSEED="0")
     t0 = time.perf_counter()
-    _run([BIN / "cosmic-ray", "exec", "cosmic-ray.toml", db.name], work, env, work / "cosmic-ray.log")
+    _run([BIN / "cosmic-ray", "exec", "cosmic-ray.toml", db.name], work, _env(work), work / "cosmic-ray.log")
     new = _results(group, db, old["sample_fraction"], old["seed"])
     return {**new, "wall_s": old["wall_s"], "retested": {"survivors": n, "killed_now": n - new["survived"],
                                                            "wall_s": round(time.perf_counter() - t0, 1)}}
@@ -277,9 +281,7 @@ def _write(root: Path, results: list[dict]) -> None:
                "score": killed / (killed + survived) if killed + survived else float("nan"),
                "excluded_operators": EXCLUDED_OPERATORS, "python": sys.version.split()[0],
                "command": " ".join([Path(sys.argv[0]).name] + sys.argv[1:])}
-    tmp = root / "summary.json.tmp"
-    tmp.write_text(json.dumps(summary, indent=1))
-    tmp.replace(root / "summary.json")
+    atomic_write_json(root / "summary.json", summary)
     lines = [f"# Mutation testing: {killed} killed, {survived} survived, score {summary['score']:.1%}", ""]
     for r in results:
         lines += [f"## {r['group']}: {r['killed']} killed, {r['survived']} survived, "
@@ -291,9 +293,7 @@ def _write(root: Path, results: list[dict]) -> None:
         lines += [f"- `{s['module']}:{s['line']}` {s['operator'].split('/')[-1]} #{s['occurrence']}: `{s['source']}`"
                   for s in r["survivors"]]
         lines.append("")
-    tmp = root / "survivors.md.tmp"
-    tmp.write_text("\n".join(lines))
-    tmp.replace(root / "survivors.md")
+    atomic_write_text(root / "survivors.md", "\n".join(lines))
 
 
 def main(argv=None) -> int:
@@ -308,25 +308,23 @@ def main(argv=None) -> int:
     ap.add_argument("--retest", action="store_true",
                     help="re-run the survivors of the sessions in --out against the current tests")
     a = ap.parse_args(argv)
-    groups = a.groups or list(GROUPS)
     a.out.mkdir(parents=True, exist_ok=True)
     if a.named:
         named = run_named(a.out)
-        tmp = a.out / "named.json.tmp"
-        tmp.write_text(json.dumps(named, indent=1))
-        tmp.replace(a.out / "named.json")
+        atomic_write_json(a.out / "named.json", named)
         return 0 if all(n["killed"] for n in named) else 1
-    results = []
-    if a.retest:
-        prev = json.loads((a.out / "summary.json").read_text())
-        groups = a.groups or [r["group"] for r in prev["groups"]]
-        results = [r for r in prev["groups"] if r["group"] not in groups]
-        a.groups, todo = groups, groups
-        groups = [r["group"] for r in prev["groups"]]
+    if a.retest:  # the groups not re-tested keep their results
+        prev = {r["group"]: r for r in json.loads((a.out / "summary.json").read_text())["groups"]}
+        todo = a.groups or list(prev)
+        results = [r for g, r in prev.items() if g not in todo]
+        fn = retest_group
     else:
-        todo = groups
-    fn = retest_group if a.retest else (lambda g, out: run_group(g, out, SAMPLE[g] if a.sample is None else a.sample,
-                                                                 a.seed))
+        todo = a.groups or list(GROUPS)
+        results = []
+
+        def fn(g, out):
+            return run_group(g, out, SAMPLE[g] if a.sample is None else a.sample, a.seed)
+
     with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         futures = {pool.submit(fn, g, a.out): g for g in todo}
         for fut in cf.as_completed(futures):
@@ -335,7 +333,7 @@ def main(argv=None) -> int:
                   f"+- {r['score_stderr']:.1%} (sample {r['sample_fraction']:g} of the mutants) "
                   f"({r['wall_s']:.0f} s)", flush=True)
             results.append(r)
-    results.sort(key=lambda r: groups.index(r["group"]))
+    results.sort(key=lambda r: list(GROUPS).index(r["group"]))
     _write(a.out, results)
     total = sum(r["killed"] for r in results) + sum(r["survived"] for r in results)
     print(f"total: {sum(r['killed'] for r in results)} of {total} mutants killed; "
