@@ -58,6 +58,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.io``                            atomic file output (user's umask), TOML reading
 ``rc3r.provenance``                    versions, git commit, command line of an output
 ``rc3r.errors``                        exception types (one-line errors on the command line)
+``rc3r._numba_cache``                  numba's disk cache keyed on the package's content (no stale kernels)
 ``rc3r.cli``                           the command line: the only place that parses, prints, exits
 ``rc3r.cli.model``                     ``verify-model``, ``make-urdf``
 ``rc3r.cli.bounds``                    ``bounds``
@@ -70,6 +71,10 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 Conventions (units, frames, gravity, parameter orders): ``docs/conventions.md``.
 """
 __version__ = "0.2.0"
+
+from . import _numba_cache
+
+_numba_cache.install()  # before any compiled kernel is defined: caches keyed on the package's content
 
 from .controllers import LAWS, Law, make_law, register_law
 from .errors import ConfigError, DivergenceError, ParameterError, Rc3rError, UrdfError

@@ -90,6 +90,14 @@ class SimOptions:
         older one). 1 = every step (MATLAB's ode23s). The default 5 makes the FBL
         runs about 2x faster and the robust runs 1.0-1.3x, at the same accuracy against
         a tight SciPy Radau solution (``rc3r bench``, docs/performance.md).
+    max_steps : float
+        Work budget of continuous mode: integrator steps (accepted and rejected) per
+        simulated second. The fast engine checks it inside the compiled loop (per 0.5 s
+        chunk), the python engine as ``10 max_steps`` right-hand-side evaluations per
+        second. Past it the run stops with status ``diverged`` and a message naming the
+        law's eps: a loop that stiff (e.g. eps = 1e-6) would otherwise run for hours. The
+        default 1e6 is 40x the most any run of docs/control.md takes (the paper's robust
+        law needs 8.4e3 steps per second at eps = 0.5 and 2.6e4 at eps = 0.001).
     q_max, qd_max, u_max : float
         Divergence bounds [rad], [rad/s], [N m].
     """
@@ -102,12 +110,13 @@ class SimOptions:
     nsub: int | None = None
     engine: str = "auto"
     jac_reuse: int = 5
+    max_steps: float = 1e6
     q_max: float = 1e3
     qd_max: float = 1e4
     u_max: float = 1e7
 
     def __post_init__(self):
-        for name in ("duration", "output_rate", "rtol", "atol", "q_max", "qd_max", "u_max"):
+        for name in ("duration", "output_rate", "rtol", "atol", "max_steps", "q_max", "qd_max", "u_max"):
             x = _real(name, getattr(self, name))
             if not (np.isfinite(x) and x > 0):
                 raise ParameterError(f"{name} must be finite and > 0, got {getattr(self, name)}")
@@ -238,11 +247,19 @@ def _initial_state(n: int, law, trajectory, x0) -> np.ndarray:
     return np.concatenate([x0, z0])
 
 
-def _message(status: int, t_end: float, opt: SimOptions) -> str:
+def _message(status: int, t_end: float, opt: SimOptions, law=None) -> str:
     if status == S.OK:
         return "ok"
     if status == S.INTERRUPTED:
         return f"interrupted at t = {t_end:.6g} s (Ctrl-C or SIGTERM); the data up to then is kept"
+    if status == S.WORK:
+        eps = getattr(law, "eps", None)
+        if eps is None and getattr(law, "eps_i", None) is not None:
+            eps = float(np.min(law.eps_i))
+        why = (f"the boundary layer eps = {eps:g} makes the loop too stiff: raise eps, or simulate the "
+               "controller sampled (--rate)" if eps is not None else "the loop is too stiff")
+        return (f"stopped at t = {t_end:.6g} s: the integrator needed more than {opt.max_steps:g} steps per "
+                f"simulated second ({why}; or raise [simulation] max_steps)")
     bound = {S.QBOUND: f" ({opt.q_max:g} rad)", S.QDBOUND: f" ({opt.qd_max:g} rad/s)",
              S.UBOUND: f" ({opt.u_max:g} N m)"}.get(status, "")
     return f"diverged at t = {t_end:.6g} s: {S.STATUS_TEXT[status]}{bound}"
@@ -336,7 +353,7 @@ def _result(plant, law, trajectory, opt, t, X, U, R, yn, status, t_end, nrhs, ns
     return SimResult(
         t=t, q=X[:, 0:n].copy(), qd=X[:, n:2 * n].copy(), q_des=R.copy(), u=U.copy(), z=X[:, 2 * n:].copy(),
         yt_r_norm=yn.copy(), status={S.OK: "ok", S.INTERRUPTED: "interrupted"}.get(status, "diverged"),
-        message=_message(status, t_end, opt), t_end=float(t_end), mode=opt.mode, engine=opt.engine,
+        message=_message(status, t_end, opt, law), t_end=float(t_end), mode=opt.mode, engine=opt.engine,
         options=opt, plant=plant.label, controller=law.describe(),
         trajectory=trajectory.describe(), rhs_evals=int(nrhs), steps=int(nsteps),
         rejected_steps=int(nrej), wall_time_s=0.0, tv_exact=tv, robot=plant.describe(),

@@ -4,7 +4,10 @@ The compiled integrators run in chunks of :data:`CHUNK_S` simulated seconds: bet
 chunks control is back in Python, so Ctrl-C or SIGTERM (which the command line turns into
 ``KeyboardInterrupt``) stops a long run within one chunk's wall time (about 0.1 s for the
 paper's robust law), and the result keeps every chunk finished before it
-(``status = "interrupted"``).
+(``status = "interrupted"``). A chunk is also bounded in work: at most
+``SimOptions.max_steps`` integrator steps per simulated second (status ``WORK``, a
+"diverged" run whose message names the law's eps), so a loop too stiff to integrate
+stops within seconds instead of running for hours.
 """
 from __future__ import annotations
 
@@ -37,9 +40,11 @@ def run(plant, law, trajectory, opt, x0):
         try:
             while True:
                 end = min(start + per, nout - 1)
+                budget = max(1000, int(np.ceil(opt.max_steps * (t_out[end] - t_out[start]))))
                 st_k, m, nrhs, nsteps, nrej, t_k = eng.continuous(
                     plant, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, 1e-5, hmax,
-                    lim, X[start:end + 1], U[start:end + 1], R[start:end + 1], yn[start:end + 1], opt.jac_reuse)
+                    lim, X[start:end + 1], U[start:end + 1], R[start:end + 1], yn[start:end + 1], opt.jac_reuse,
+                    budget)
                 counts += (nrhs, nsteps, nrej)
                 stored, st, t_end = start + m, st_k, t_k
                 if st != S.OK or end == nout - 1:

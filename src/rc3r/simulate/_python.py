@@ -16,15 +16,33 @@ from . import _limits, _result, _sample_grid
 from . import status as S
 
 
-class _Loop:
-    """Controller and plant of one run, evaluated from Python."""
+#: Right-hand-side evaluations of SciPy's Radau counted as one step of ``SimOptions.max_steps``.
+RHS_PER_STEP = 10
 
-    def __init__(self, plant, law, trajectory):
+
+class _Stop(Exception):
+    """Raised inside SciPy's right-hand side to end a continuous run: ``status`` at ``t``."""
+
+    def __init__(self, status: int, t: float):
+        super().__init__(status, t)
+        self.status, self.t = status, t
+
+
+class _Loop:
+    """Controller and plant of one run, evaluated from Python.
+
+    ``budget`` bounds the right-hand-side evaluations of a continuous run (``None``: unbounded);
+    a non-finite torque or state derivative ends the run (:class:`_Stop`) instead of reaching
+    SciPy, which would raise on it.
+    """
+
+    def __init__(self, plant, law, trajectory, budget=None):
         self.plant, self.law = plant, law
         self.n = plant.n
         self.tp = trajectory.pack()
         self.ref = np.empty((3, self.n))
         self.nrhs = 0
+        self.budget = budget
 
     def control(self, t, x):
         """``(u, zdot, ||Y^T r||)`` at time t and state x = (q, qd, z)."""
@@ -42,8 +60,13 @@ class _Loop:
         return out
 
     def rhs(self, t, x):
+        if self.budget is not None and self.nrhs >= self.budget:
+            raise _Stop(S.WORK, t)
         u, zdot, _ = self.control(t, x)
-        return np.concatenate([self.plant_rhs(x, u), zdot])
+        out = np.concatenate([self.plant_rhs(x, u), zdot])
+        if not np.all(np.isfinite(out)):
+            raise _Stop(S.NONFINITE, t)
+        return out
 
 
 def _margins(x, n, opt) -> tuple[float, float]:
@@ -62,36 +85,13 @@ def _bound_event(n, opt):
 def run(plant, law, trajectory, opt, x0):
     from scipy.integrate import solve_ivp
 
-    loop = _Loop(plant, law, trajectory)
     n = plant.n
     reference = opt.engine == "reference"
     rtol, atol = (min(opt.rtol, 1e-11), min(opt.atol, 1e-12)) if reference else (opt.rtol, opt.atol)
     lim = _limits(opt)
     if opt.rate is None:
-        nout = int(round(opt.duration * opt.output_rate)) + 1
-        t_eval = np.linspace(0.0, opt.duration, nout)
-        with np.errstate(all="ignore"):
-            sol = solve_ivp(loop.rhs, (0.0, opt.duration), x0, method="Radau", t_eval=t_eval,
-                            rtol=rtol, atol=atol, events=_bound_event(n, opt))
-        X = sol.y.T
-        m = X.shape[0]
-        U = np.zeros((m, n)); R = np.zeros((m, n)); yn = np.zeros(m)
-        status = S.OK
-        for k in range(m):
-            U[k], _, yn[k] = loop.control(sol.t[k], X[k])
-            R[k] = loop.ref[0]
-            st = S.check(X[k], U[k], lim)
-            if st != S.OK:
-                status, m = st, k + 1
-                break
-        t_end = float(sol.t[m - 1]) if m else 0.0
-        if status == S.OK and sol.status == 1:  # terminal bound event
-            q_margin, qd_margin = _margins(sol.y_events[0][0], n, opt)
-            status, t_end = (S.QDBOUND if qd_margin <= q_margin else S.QBOUND), float(sol.t_events[0][0])
-        elif status == S.OK and sol.status < 0:
-            status, t_end = S.HMIN, float(sol.t[-1]) if sol.t.size else 0.0
-        return _result(plant, law, trajectory, opt, sol.t[:m], X[:m], U[:m], R[:m], yn[:m],
-                       status, t_end, loop.nrhs, len(sol.t), 0)
+        return _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim)
+    loop = _Loop(plant, law, trajectory)
     Ts, nsamples, dec = _sample_grid(opt)
     x = x0.copy()
     rows_t, rows_x, rows_u, rows_r, rows_y = [], [], [], [], []
@@ -129,6 +129,58 @@ def run(plant, law, trajectory, opt, x0):
     return _result(plant, law, trajectory, opt, np.array(rows_t), np.array(rows_x).reshape(len(rows_t), -1),
                    np.array(rows_u).reshape(len(rows_t), n), np.array(rows_r).reshape(len(rows_t), n),
                    np.array(rows_y), status, t_end, loop.nrhs, nsamples, 0, tv=tv)
+
+
+def _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim):
+    """Continuous time: SciPy's Radau stepped here (as ``solve_ivp`` does), so that a stop raised in
+    the right-hand side (budget, non-finite torque) keeps every row before it. Rows inside a step are
+    the solver's dense output (``solve_ivp``'s ``t_eval``); a |q| or |qd| bound crossing is located on
+    the dense output of its step (``solve_ivp``'s terminal event)."""
+    from scipy.integrate import Radau
+    from scipy.optimize import brentq
+
+    n = plant.n
+    loop = _Loop(plant, law, trajectory, budget=int(RHS_PER_STEP * opt.max_steps * opt.duration) + 1000)
+    nout = int(round(opt.duration * opt.output_rate)) + 1
+    t_eval = np.linspace(0.0, opt.duration, nout)
+    X = np.empty((nout, x0.size))
+    X[0] = x0
+    k, status, t_end, nsteps = 1, S.OK, opt.duration, 0
+    margin = _bound_event(n, opt)
+    with np.errstate(all="ignore"):
+        try:
+            solver = Radau(loop.rhs, 0.0, x0, opt.duration, rtol=rtol, atol=atol)
+            while solver.status == "running":
+                t_old = solver.t
+                solver.step()
+                nsteps += 1
+                if solver.status == "failed":
+                    status, t_end = S.HMIN, float(solver.t)
+                    break
+                dense = solver.dense_output()
+                t_hi = solver.t
+                if margin(solver.t, solver.y) < 0:  # the bound is crossed inside this step: find where
+                    t_hi = brentq(lambda s: margin(s, dense(s)), t_old, solver.t, xtol=1e-12)
+                    q_margin, qd_margin = _margins(dense(t_hi), n, opt)
+                    status, t_end = (S.QDBOUND if qd_margin <= q_margin else S.QBOUND), float(t_hi)
+                while k < nout and t_eval[k] <= t_hi:
+                    X[k] = dense(t_eval[k])
+                    k += 1
+                if status != S.OK:
+                    break
+        except _Stop as exc:
+            status, t_end = exc.status, float(exc.t)
+    m = k
+    U = np.zeros((m, n)); R = np.zeros((m, n)); yn = np.zeros(m)
+    for i in range(m):
+        U[i], _, yn[i] = loop.control(t_eval[i], X[i])
+        R[i] = loop.ref[0]
+        st = S.check(X[i], U[i], lim)
+        if st != S.OK:
+            status, m, t_end = st, i + 1, float(t_eval[i])
+            break
+    return _result(plant, law, trajectory, opt, t_eval[:m], X[:m], U[:m], R[:m], yn[:m],
+                   status, t_end, loop.nrhs, nsteps, 0)
 
 
 def _rk4(loop, x, u, h, nsub):

@@ -1,7 +1,9 @@
 """Status codes of a simulation run, shared by every engine, and the compiled bound check.
 
 0 ok, 1 non-finite state, 2 |q| bound, 3 |qd| bound, 4 |u| bound, 5 mass matrix not
-positive definite, 6 step size underflow, 7 interrupted (SIGINT/SIGTERM; not a divergence).
+positive definite, 6 step size underflow, 7 interrupted (SIGINT/SIGTERM; not a divergence),
+8 work budget exhausted (the continuous-time integrator took more than
+``SimOptions.max_steps`` steps per simulated second: the loop is too stiff to integrate).
 """
 from __future__ import annotations
 
@@ -9,7 +11,7 @@ import math
 
 from numba import njit
 
-OK, NONFINITE, QBOUND, QDBOUND, UBOUND, NOTPD, HMIN, INTERRUPTED = 0, 1, 2, 3, 4, 5, 6, 7
+OK, NONFINITE, QBOUND, QDBOUND, UBOUND, NOTPD, HMIN, INTERRUPTED, WORK = 0, 1, 2, 3, 4, 5, 6, 7, 8
 
 STATUS_TEXT = {
     OK: "ok",
@@ -20,6 +22,7 @@ STATUS_TEXT = {
     NOTPD: "plant mass matrix not positive definite",
     HMIN: "integrator step size underflow",
     INTERRUPTED: "interrupted (Ctrl-C or SIGTERM)",
+    WORK: "integrator work budget exhausted",
 }
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from ...controllers._kernels import apply_regressor, law_output, law_signals
-from ...simulate.status import HMIN, NOTPD, OK, check
+from ...simulate.status import HMIN, NOTPD, OK, WORK, check
 from ...trajectory import reference_into
 from . import kernels as K
 
@@ -127,8 +127,13 @@ def _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33,
 
 @njit(**_JIT)
 def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hmax, lim,
-                         X, U, R, ynorm, jac_reuse):
+                         X, U, R, ynorm, jac_reuse, max_steps):
     """Integrate from ``t_out[0]``; store x, u, q_d rows at every ``t_out``.
+
+    At most ``max_steps`` steps (accepted and rejected) are taken in this call; past that it
+    returns :data:`~rc3r.simulate.status.WORK` where it stands (a too stiff loop, e.g. a
+    boundary layer eps so thin that the step size collapses without reaching underflow), so a
+    call's wall time stays bounded and the caller regains control.
 
     The Jacobian is recomputed every ``jac_reuse`` accepted steps and after any
     rejected step taken with an older one (``jac_reuse = 1``: every step, as ode23s).
@@ -174,6 +179,8 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
             jac_age = 0
         while True:
+            if nsteps + nrej >= max_steps:
+                return WORK, k, nrhs, nsteps, nrej, t
             hd = h * d
             for i in range(n):
                 for j in range(n):
@@ -350,10 +357,11 @@ class FastEngine:
             return True
 
     @staticmethod
-    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse):
+    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
+                   max_steps):
         l2, g0 = plant.params.lengths[1], plant.params.g0
         return integrate_continuous(x0, t_out, plant.theta, code, cp, tp, l2, g0, rtol, atol, h0, hmax,
-                                    lim, X, U, R, yn, jac_reuse)
+                                    lim, X, U, R, yn, jac_reuse, max_steps)
 
     @staticmethod
     def sampled(plant, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv):
