@@ -2,9 +2,14 @@
 work, locked, with the user's umask; every output carries its provenance."""
 from __future__ import annotations
 
+import errno
 import json
 import os
+import shutil
 import stat
+import time
+
+from pathlib import Path
 
 import pytest
 
@@ -53,23 +58,31 @@ def test_second_writer_refused_stale_lock_taken(tmp_path, capsys):
 
 
 def test_directory_replaced_as_a_whole_and_interrupt_keeps_the_old_one(tmp_path, capsys, monkeypatch):
-    """A rerun replaces the directory (a file of the old run does not survive beside the new
-    ones); an interrupt mid-run leaves the old directory byte for byte, and no temporary files."""
+    """A rerun replaces rc3r's files as a whole (an older run's animation.gif does not survive
+    beside the new ones) and keeps what rc3r did not write, the very same files; an interrupt
+    mid-run leaves the old directory byte for byte, and no temporary files."""
     out = tmp_path / "r"
     assert main(RUN + ["--out", str(out)]) == 0
-    (out / "stale-from-an-older-run.txt").write_text("x")
+    (out / "animation.gif").write_text("an older run's animation")  # rc3r's name: replaced
+    (out / "notes.txt").write_text("my notes on this run")  # not rc3r's: kept
+    (out / "extra").mkdir()
+    (out / "extra" / "fit.py").write_text("x = 1")
+    inode = (out / "notes.txt").stat().st_ino
     assert main(RUN + ["--controller", "pd", "--out", str(out)]) == 2  # an earlier result: not without --force
     assert "--force" in _err(capsys)
     assert main(RUN + ["--controller", "pd", "--out", str(out), "--force"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "run.png", "timeseries.csv"]
-    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(p.name for p in out.iterdir()) == ["extra", "metrics.json", "notes.txt", "run.png", "timeseries.csv"]
+    assert (out / "notes.txt").read_text() == "my notes on this run" and (out / "notes.txt").stat().st_ino == inode
+    assert (out / "extra" / "fit.py").read_text() == "x = 1"
+    assert json.loads((out / "metrics.json").read_text())["controller"] == "pd"
+    before = {p.name: p.read_bytes() if p.is_file() else None for p in out.iterdir()}
 
     def interrupted(spec):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(cli_run, "execute", interrupted)
     assert main(RUN + ["--out", str(out), "--force"]) == 130
-    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert {p.name: p.read_bytes() if p.is_file() else None for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]  # no .tmp-, .old- or .lock left
 
 
@@ -128,3 +141,132 @@ def test_default_out_is_out_run_name_and_is_not_overwritten(tmp_path, monkeypatc
     capsys.readouterr()
     assert main(RUN) == 2 and "--force" in _err(capsys)
     assert main(RUN + ["--force"]) == 0
+
+
+# ---- a place that cannot be written: found before any work, or one line at write time ------------------
+
+
+def _no_simulation(monkeypatch):
+    monkeypatch.setattr(cli_run, "execute", lambda spec: pytest.fail("simulated despite an unwritable --out"))
+
+
+@pytest.mark.parametrize("where, needle", [
+    (lambda tmp: tmp / "afile" / "r", "Not a directory"),  # a regular file on the way
+    (lambda tmp: Path("/proc") / "rc3r-out", "cannot write in /proc"),  # procfs: no file can be created, even by root
+    (lambda tmp: tmp / ("r" * 250), "File name too long"),  # the name fits, .<name>.lock.XXXXXXXX does not (255)
+    (lambda tmp: tmp / ("r" * 300), "File name too long"),
+], ids=["under-a-file", "proc", "name-250", "name-300"])
+def test_unwritable_out_is_refused_before_any_work(tmp_path, capsys, monkeypatch, where, needle):
+    """As root, permission bits do not stop writes, so writability is tried (a file created and removed
+    where the lock will be): the refusal is the only line on stderr (no progress line, no compile
+    announcement), exit 2, before simulating. On main these were exit 70 (name too long) or an exit 2
+    printed after the progress lines, once the lock could not be created."""
+    (tmp_path / "afile").write_text("x")
+    _no_simulation(monkeypatch)
+    assert main(RUN + ["--out", str(where(tmp_path))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("rc3r: error: --out") and needle in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+@pytest.mark.parametrize("fail_at", ["write", "swap"])
+def test_an_oserror_at_write_time_is_one_line_and_keeps_the_earlier_results(tmp_path, capsys, monkeypatch, fail_at):
+    """A file system that turns read-only (or full) after the checks: writing the results (the CSV) or
+    swapping the directory in raises OSError(EROFS). Simulated by raising it where the OS would (as
+    root no chmod makes a directory unwritable). Expected: exit 2, one line naming the error, the
+    earlier result byte for byte, no temporary directory left. On main: exit 70 (internal error)
+    for the write, and for the swap the same unless the errno happened to be in a list of four."""
+    from rc3r.simulate import export
+
+    out = tmp_path / "r"
+    assert main(RUN + ["--out", str(out)]) == 0
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    rofs = OSError(errno.EROFS, os.strerror(errno.EROFS))
+    if fail_at == "write":
+        def write_csv(res, path):
+            raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(path))
+        monkeypatch.setattr(export, "write_csv", write_csv)
+    else:
+        real = os.replace
+
+        def replace(src, dst):
+            if Path(dst) == out and ".r.tmp-" in str(src):  # the new directory onto --out
+                raise rofs
+            return real(src, dst)
+        monkeypatch.setattr(os, "replace", replace)
+    assert main(RUN + ["--controller", "pd", "--out", str(out), "--force"]) == 2
+    line = _err(capsys)
+    assert "Read-only file system" in line and "earlier results in it are kept" in line, line
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r"]
+
+
+# ---- the lock: never empty, so a second writer cannot slip in; stale locks broken safely ---------------
+
+
+def test_an_empty_young_lock_is_held_not_stale(tmp_path):
+    """An empty lock file is the state between an exclusive create and the PID write (of a writer on a
+    file system without hard links, or an older rc3r). A second writer must not take it as stale. On
+    main _acquire deleted it and took the lock: two writers."""
+    from rc3r.cli._output import _acquire
+    from rc3r.errors import ConfigError
+
+    lock = tmp_path / ".r.lock"
+    lock.touch()  # just created, PID not written yet
+    with pytest.raises(ConfigError, match="taking the lock"):
+        _acquire(lock)
+    assert lock.exists() and lock.read_text() == ""
+    old = time.time() - 60  # an empty lock a minute old: its writer died before writing; stale
+    os.utime(lock, (old, old))
+    _acquire(lock)
+    assert lock.read_text() == str(os.getpid())
+
+
+def test_the_lock_appears_with_its_pid_and_a_racing_writer_is_refused(tmp_path, monkeypatch):
+    """Deterministic interleaving: at the very moment the lock file appears (inside os.link), a second
+    writer runs its _acquire. It must find the first writer's PID there (the file is never empty) and
+    be refused. On main the lock was created empty by os.open and filled afterwards: os.link was
+    never called (the hook below fails) and a writer in that gap deleted the 'stale' empty lock."""
+    from rc3r.cli import _output
+    from rc3r.errors import ConfigError
+
+    lock = tmp_path / ".r.lock"
+    real, seen = os.link, []
+
+    def link(src, dst, **kw):
+        real(src, dst, **kw)
+        if Path(dst) == lock and not seen:
+            seen.append(lock.read_text())
+            with pytest.raises(ConfigError, match=f"pid {os.getpid()}"):
+                _output._acquire(lock)  # the second writer, in the race window
+
+    monkeypatch.setattr(os, "link", link)
+    ino = _output._acquire(lock)
+    assert seen == [str(os.getpid())] and lock.stat().st_ino == ino and lock.read_text() == str(os.getpid())
+    assert [p.name for p in tmp_path.iterdir()] == [".r.lock"]  # its temporary file is gone
+
+
+def test_breaking_a_stale_lock_never_removes_a_fresh_one(tmp_path, monkeypatch):
+    """Two writers find the same stale lock (a dead PID). Writer B breaks it and places its own lock
+    between A's read and A's rename; A's rename then moves B's fresh lock. A must notice (another
+    inode), put B's lock back, and be refused; B's lock is intact."""
+    from rc3r.cli import _output
+    from rc3r.errors import ConfigError
+
+    lock = tmp_path / ".r.lock"
+    lock.write_text("999999999")  # no such process
+    real = os.rename
+
+    def rename(src, dst):
+        if Path(src) == lock and not (tmp_path / "b").exists():
+            (tmp_path / "b").write_text(str(os.getpid()))  # writer B (alive: this process) ...
+            os.unlink(lock)
+            os.link(tmp_path / "b", lock)  # ... took the lock in between
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "rename", rename)
+    with pytest.raises(ConfigError, match=f"pid {os.getpid()}"):
+        _output._acquire(lock)
+    assert lock.read_text() == str(os.getpid()) and lock.stat().st_ino == (tmp_path / "b").stat().st_ino
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".r.lock", "b"]
