@@ -49,8 +49,10 @@ spec = rc3r.build_run(controller="fbl", duration=0.01, rate=1000.0)
 tp = spec.trajectory.pack()
 x0 = np.array([0.8, 0.0, 0.0, 0.0, 0.0, 0.0])   # |q1| = 0.8 rad, inside q_max = 1
 X = np.zeros((20, 6)); U = np.zeros((20, 3)); R = np.zeros((20, 3)); yn = np.zeros(20); tv = np.zeros(3)
-st = integrate_sampled(x0, 0, 1e-3, 2, 1, 4, theta(table1()), int(spec.law.code), spec.law.pack(3), tp,
-                       1.0, 9.81, np.array([1.0, 1e4, 1e7]), X, U, R, yn, tv)[0]
+fx = np.concatenate([np.zeros(9), [1.0], np.full(3, np.inf)])
+st = integrate_sampled(x0, 0, 1e-3, 2, 1, 4, theta(table1()), fx, int(spec.law.code), spec.law.pack(3), tp,
+                       1.0, 9.81, np.array([1.0, 1e4, 1e7]), X, U, R, yn, tv, np.zeros((0, 6)), np.zeros(3),
+                       np.zeros((1, 3)))[0]
 print("STATUS", st)
 """
 

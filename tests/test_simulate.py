@@ -145,7 +145,7 @@ def test_wall_time_never_includes_compilation(monkeypatch):
     real = spec.plant.fast_engine.continuous
 
     def counting(*a, **k):
-        calls.append(a[5].shape[0])  # rows of t_out in this call
+        calls.append(a[6].shape[0])  # rows of t_out in this call
         return real(*a, **k)
 
     monkeypatch.setattr(S, "_WARMED", set())

@@ -112,7 +112,9 @@ def test_step_underflow_exit_fires_at_its_threshold(perturbed):
     law = rc3r.make_law("fbl", perturbed.plant.theta)
     opt = SimOptions(duration=0.01, q_max=1e300, qd_max=1e300, u_max=1e308, engine="fast")
     x0 = np.array([0.0, 5.0, 0.0, 1e150, 0.0, 0.0])
-    res = _fast.run(perturbed.plant, law, perturbed.trajectory, opt, x0)
+    from rc3r.plants import as_plant
+
+    res = _fast.run(as_plant(perturbed.plant), law, perturbed.trajectory, opt, x0)
     assert res.status == "diverged" and S.STATUS_TEXT[S.HMIN] in res.message
     assert res.t_end == 0.0 and res.steps == 0
     assert res.rejected_steps == 10

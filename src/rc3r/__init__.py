@@ -39,6 +39,14 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.uncertainty.bounds``            theta_0 and rho: the paper's method, certified exact ranges
 ``rc3r.uncertainty.payload``           exact bounds for an unknown payload on the last link
 ``rc3r.uncertainty.sampled``           sampled lower bound on max ||theta - theta_0||
+``rc3r.plants``                        the true system: :class:`Plant` = rigid body + effects, loop effects
+``rc3r.plants.base``                   the plant contract, :class:`Effect`, the effect registry
+``rc3r.plants.friction``               viscous, smooth Coulomb and offset joint friction (URDF or config)
+``rc3r.plants.saturation``             actuator torque limits (URDF effort or config)
+``rc3r.plants.limits``                 joint position/velocity limits, reported when crossed (a monitor)
+``rc3r.plants.loop``                   sensor noise, quantization, delay, initial error of a sampled loop
+``rc3r.plants._kernels``               the compiled effects (fields every compiled engine applies)
+``rc3r.plants.mujoco``                 MuJoCo as the plant's rigid body (optional extra)
 ``rc3r.simulate``                      :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
 ``rc3r.simulate._fast``                the ``fast`` engine (a robot's compiled simulator)
 ``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)

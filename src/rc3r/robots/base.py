@@ -49,7 +49,7 @@ import abc
 
 import numpy as np
 
-__all__ = ["Robot"]
+__all__ = ["Robot", "kinematics_differ"]
 
 
 class Robot(abc.ABC):
@@ -165,3 +165,28 @@ class Robot(abc.ABC):
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} n={self.n} p={self.p} label={self.label!r}>"
+
+
+def kinematics_differ(a: Robot, b: Robot, seed: int = 0, rtol: float = 1e-9) -> str | None:
+    """Why robots ``a`` and ``b`` do not share their kinematics, or None if they do.
+
+    Same n and p, and the same regressor ``Y(q, qd, v, a)`` at three states drawn from
+    ``numpy.random.default_rng(seed)`` (q in [-pi, pi], the rest in [-2, 2]) to ``rtol`` relative
+    to the largest entry: Y depends on the kinematics and gravity only, so a plant built from the
+    same URDF with other inertias passes, a UR10 plant under a UR5 model does not.
+    """
+    if a.n != b.n:
+        return f"{b.n} joints, the model has {a.n}"
+    if a.p != b.p:
+        return f"{b.p} base parameters, the model has {a.p}"
+    rng = np.random.default_rng(seed)
+    for _ in range(3):
+        q = rng.uniform(-np.pi, np.pi, a.n)
+        qd, v, acc = rng.uniform(-2.0, 2.0, (3, a.n))
+        ya, yb = a.regressor(q, qd, v, acc), b.regressor(q, qd, v, acc)
+        scale = max(float(np.abs(ya).max()), 1e-12)
+        if not np.allclose(ya, yb, rtol=0.0, atol=rtol * scale):
+            return (f"its regressor differs from the model's by {float(np.abs(ya - yb).max()):.3g} "
+                    f"(relative {float(np.abs(ya - yb).max()) / scale:.2g}) at a random state: another kinematic "
+                    "structure or gravity")
+    return None

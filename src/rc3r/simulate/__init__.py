@@ -187,6 +187,7 @@ class SimResult:
     wall_time_s: float
     tv_exact: np.ndarray | None = field(default=None)
     robot: dict = field(default_factory=dict)
+    loop: dict | None = field(default=None)
 
     @property
     def e(self) -> np.ndarray:
@@ -266,24 +267,54 @@ def _message(status: int, t_end: float, opt: SimOptions, law=None) -> str:
 
 
 def _engine(plant, law, opt: SimOptions) -> str:
-    fast_ok = plant.fast_engine is not None and law.code is not None
+    eng = getattr(plant.rigid, "fast_engine", None)
+    fast_ok = eng is not None and law.code is not None and plant.compiled
     if opt.engine == "auto":
         return "fast" if fast_ok else "python"
     if opt.engine == "fast" and not fast_ok:
-        why = (f"robot {plant.name!r} has no compiled simulator" if plant.fast_engine is None
-               else f"law {law.name!r} has no compiled kernel")
+        why = (f"robot {plant.rigid.name!r} has no compiled simulator" if eng is None
+               else f"law {law.name!r} has no compiled kernel" if law.code is None
+               else "the plant has an effect the compiled engine does not apply: "
+                    + ", ".join(e.name for e in plant.effects if not (e.compiled or e.monitor)))
         raise ParameterError(f"engine 'fast' is not available: {why} (use engine 'python')")
     return opt.engine
 
 
-def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None) -> SimResult:
-    """Simulate control law ``law`` on robot ``plant`` tracking ``trajectory``.
+def _check_structure(plant, model, law, trajectory, loop, opt) -> None:
+    """The run's parts fit together: sizes, the model's kinematics = the plant's, loop effects sampled."""
+    from ..robots.base import kinematics_differ
+
+    if trajectory.n != plant.n:
+        raise ParameterError(f"trajectory has {trajectory.n} joints, robot '{plant.label}' has {plant.n}")
+    if model.n != plant.n:
+        raise ParameterError(f"the controller's model has {model.n} joints, the plant '{plant.label}' has {plant.n}")
+    if law.p != model.p:
+        raise ParameterError(f"law {law.name!r} has {law.p} coefficients, robot '{model.label}' has {model.p}")
+    if model is not plant.rigid and hasattr(plant.rigid, "regressor"):
+        why = kinematics_differ(model, plant.rigid)
+        if why:
+            raise ParameterError(f"the plant '{plant.label}' is not the model's arm: {why}")
+    if hasattr(plant.rigid, "advance") and any(not e.monitor and type(e).joint_torque is not
+                                               type(e).__mro__[-2].joint_torque for e in plant.effects):
+        raise ParameterError("joint-torque effects (friction) are not applied inside a rigid body that integrates "
+                             "itself (MuJoCo): use the Pinocchio plant engine for friction")
+    if loop is not None:
+        if loop.n != plant.n:
+            raise ParameterError(f"loop effects are sized for {loop.n} joints, the plant has {plant.n}")
+        if loop.active and opt.rate is None:
+            raise ParameterError("sensor noise, quantization and delay act on a sampled controller: give a rate "
+                                 "(--rate HZ)")
+
+
+def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None, loop=None,
+             model=None) -> SimResult:
+    """Simulate control law ``law`` on ``plant`` tracking ``trajectory``.
 
     Parameters
     ----------
-    plant : rc3r.robots.base.Robot
-        The true robot. The law never reads its parameters; it sees the plant only
-        through the regressor Y.
+    plant : rc3r.plants.Plant or rc3r.robots.base.Robot
+        The true system: a rigid body and its effects (friction, saturation, limits); a bare
+        robot is the rigid plant. The law never reads its parameters.
     law : rc3r.controllers.Law
         Any registered or user-defined law, with its own model theta (p,).
     trajectory : rc3r.trajectory.Trajectory
@@ -291,7 +322,12 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     options : SimOptions
     x0 : array_like (2 n,), optional
         Initial (q, qd); default: on the trajectory at t = 0 (the paper's
-        "matching conditions").
+        "matching conditions"), plus the loop's initial error.
+    loop : rc3r.plants.LoopEffects, optional
+        Sensor noise, quantization, delay (sampled mode only) and initial error.
+    model : rc3r.robots.base.Robot, optional
+        The robot whose regressor the law evaluates (default the plant's rigid body). Its
+        kinematics must be the plant's (checked at three seeded states).
 
     Returns
     -------
@@ -313,10 +349,13 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     >>> bool(abs(res.e).max() < 1e-3)
     True
     """
-    if trajectory.n != plant.n:
-        raise ParameterError(f"trajectory has {trajectory.n} joints, robot '{plant.label}' has {plant.n}")
-    if law.p != plant.p:
-        raise ParameterError(f"law {law.name!r} has {law.p} coefficients, robot '{plant.label}' has {plant.p}")
+    from ..plants import as_plant
+
+    plant = as_plant(plant)
+    model = plant.rigid if model is None else model
+    _check_structure(plant, model, law, trajectory, loop, options)
+    if x0 is None and loop is not None:
+        x0 = loop.x0(*trajectory.evaluate(0.0)[:2])
     x0 = _initial_state(plant.n, law, trajectory, x0)
     engine = _engine(plant, law, options)
     if engine == "fast":
@@ -326,9 +365,9 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     if engine == "fast":
         _warm_up(run, plant, law, trajectory, options, x0)
     t0 = time.perf_counter()
-    out = run(plant, law, trajectory, replace(options, engine=engine), x0)
+    out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
     wall = time.perf_counter() - t0
-    return replace(out, wall_time_s=wall)
+    return replace(out, wall_time_s=wall, loop=None if loop is None else loop.describe())
 
 
 _WARMED: set = set()
@@ -337,7 +376,7 @@ _WARMED: set = set()
 def _warm_up(run, plant, law, trajectory, opt: SimOptions, x0) -> None:
     """Run two output periods once per compiled integrator and process, untimed, so that numba's
     compilation (or cache load) is never booked as a simulation's wall time."""
-    eng = plant.fast_engine
+    eng = plant.rigid.fast_engine
     key = (eng if isinstance(eng, type) else type(eng), opt.mode)
     if key in _WARMED:
         return

@@ -23,9 +23,15 @@ CHUNK_S = 0.5
 HMAX = 0.001
 
 
-def run(plant, law, trajectory, opt, x0):
-    eng = plant.fast_engine
+def run(plant, law, trajectory, opt, x0, loop=None, model=None):
+    """Simulate on the rigid body's compiled simulator; ``plant`` is a :class:`~rc3r.plants.Plant` whose
+    effects are compiled ones (packed by :meth:`~rc3r.plants.Plant.pack`), ``loop`` the sampled loop's
+    effects (or None). ``model`` is ignored: the compiled regressor is the rigid body's, whose
+    kinematics :func:`rc3r.simulate.simulate` checked equal to the model's."""
+    rigid = plant.rigid
+    eng = rigid.fast_engine
     n = plant.n
+    fx = plant.pack()
     cp, tp, code = law.pack(n), trajectory.pack(), int(law.code)
     lim = _limits(opt)
     size = x0.size
@@ -42,7 +48,7 @@ def run(plant, law, trajectory, opt, x0):
                 end = min(start + per, nout - 1)
                 budget = max(1000, int(np.ceil(opt.max_steps * (t_out[end] - t_out[start]))))
                 st_k, m, nrhs, nsteps, nrej, t_k = eng.continuous(
-                    plant, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, 1e-5, hmax,
+                    rigid, fx, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, 1e-5, hmax,
                     lim, X[start:end + 1], U[start:end + 1], R[start:end + 1], yn[start:end + 1], opt.jac_reuse,
                     budget)
                 counts += (nrhs, nsteps, nrej)
@@ -60,14 +66,17 @@ def run(plant, law, trajectory, opt, x0):
     X = np.zeros((nout, size)); U = np.zeros((nout, n)); R = np.zeros((nout, n)); yn = np.zeros(nout)
     X[0] = x0
     tv = np.zeros(n)
+    noise = loop.noise(nsamples) if loop is not None else np.zeros((0, 2 * n))
+    quant = loop.quantization if loop is not None else np.zeros(n)
+    ubuf = np.zeros(((loop.delay if loop is not None else 0) + 1, n))  # the delay line, across chunks
     per = max(1, int(round(CHUNK_S * opt.rate)) // dec) * dec  # samples per call, a multiple of dec
     s0, row, stored, st, t_end, nrhs_all, done = 0, 0, 0, S.OK, 0.0, 0, 0
     try:
         while True:
             k = min(per, nsamples - s0)
             st_k, m, nrhs, ndone, t_k = eng.sampled(
-                plant, code, cp, tp, X[row].copy(), s0, Ts, k, dec, opt.substeps, lim,
-                X[row:], U[row:], R[row:], yn[row:], tv)
+                rigid, fx, code, cp, tp, X[row].copy(), s0, Ts, k, dec, opt.substeps, lim,
+                X[row:], U[row:], R[row:], yn[row:], tv, noise, quant, ubuf)
             nrhs_all += nrhs
             stored, st, t_end, done = row + m, st_k, t_k, s0 + ndone
             if st != S.OK or s0 + k >= nsamples:

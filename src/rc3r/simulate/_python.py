@@ -1,8 +1,12 @@
-"""The ``python`` and ``reference`` engines: any robot, any law, in plain Python.
+"""The ``python`` and ``reference`` engines: any robot, any law, any plant effect, in plain Python.
 
-The plant is the robot's :meth:`~rc3r.robots.base.Robot.forward_dynamics` (Pinocchio
-ABA for the robots here); the controller is :meth:`rc3r.controllers.Law.torque`, which
-sees the robot only through its regressor. ``python``: SciPy ``Radau`` at the options'
+The plant is :meth:`rc3r.plants.Plant.forward_dynamics` (the rigid body's forward dynamics,
+Pinocchio ABA for the robots here, under every effect); the controller is
+:meth:`rc3r.controllers.Law.torque` on the *model* (a robot of the same kinematics), which it
+sees only through its regressor. In sampled mode the controller gets the measurement of the
+loop's effects (:mod:`rc3r.plants.loop`) and its torque goes through their delay line; a rigid
+body with an ``advance(q, qd, u, T)`` method (MuJoCo, :mod:`rc3r.plants.mujoco`) integrates
+the held torque itself (its own RK4 at a fine step) instead of this module's RK4. ``python``: SciPy ``Radau`` at the options'
 tolerances (continuous) or RK4 with ``nsub`` sub-steps per period (sampled).
 ``reference``: ``Radau`` at ``rtol <= 1e-11`` (continuous) or ``DOP853`` per period
 (sampled).
@@ -36,33 +40,38 @@ class _Loop:
     SciPy, which would raise on it.
     """
 
-    def __init__(self, plant, law, trajectory, budget=None):
+    def __init__(self, plant, law, trajectory, budget=None, model=None):
         self.plant, self.law = plant, law
+        self.model = model if model is not None else plant.rigid
         self.n = plant.n
         self.tp = trajectory.pack()
         self.ref = np.empty((3, self.n))
         self.nrhs = 0
         self.budget = budget
 
-    def control(self, t, x):
-        """``(u, zdot, ||Y^T r||)`` at time t and state x = (q, qd, z)."""
+    def control(self, t, x, q=None, qd=None):
+        """``(u, zdot, ||Y^T r||)`` at time t, state x = (q, qd, z), measured (q, qd) (default: x's)."""
         n = self.n
         reference_into(self.tp, t, self.ref)
-        u, zdot, yn = self.law.torque(self.plant, x[0:n], x[n:2 * n], self.ref, x[2 * n:])
+        q = x[0:n] if q is None else q
+        qd = x[n:2 * n] if qd is None else qd
+        u, zdot, yn = self.law.torque(self.model, q, qd, self.ref, x[2 * n:])
         return np.asarray(u, dtype=float), np.asarray(zdot, dtype=float), float(yn)
 
     def plant_rhs(self, x, u):
+        """``(qd, qdd)`` of the plant under the actuators' torque ``u`` (after the actuator maps)."""
         n = self.n
         self.nrhs += 1
         out = np.empty(2 * n)
         out[:n] = x[n:2 * n]
-        out[n:] = self.plant.forward_dynamics(x[0:n], x[n:2 * n], u)
+        out[n:] = self.plant.forward_dynamics(x[0:n], x[n:2 * n], u, delivered=True)
         return out
 
     def rhs(self, t, x):
         if self.budget is not None and self.nrhs >= self.budget:
             raise _Stop(S.WORK, t)
         u, zdot, _ = self.control(t, x)
+        u = self.plant.applied_torque(x[0:self.n], x[self.n:2 * self.n], u)
         out = np.concatenate([self.plant_rhs(x, u), zdot])
         if not np.all(np.isfinite(out)):
             raise _Stop(S.NONFINITE, t)
@@ -82,7 +91,9 @@ def _bound_event(n, opt):
     return event
 
 
-def run(plant, law, trajectory, opt, x0):
+def run(plant, law, trajectory, opt, x0, loop=None, model=None):
+    """Simulate ``law`` (on ``model``'s regressor) against the :class:`~rc3r.plants.Plant` ``plant``;
+    ``loop``: the sampled loop's effects or None."""
     from scipy.integrate import solve_ivp
 
     n = plant.n
@@ -90,8 +101,8 @@ def run(plant, law, trajectory, opt, x0):
     rtol, atol = (min(opt.rtol, 1e-11), min(opt.atol, 1e-12)) if reference else (opt.rtol, opt.atol)
     lim = _limits(opt)
     if opt.rate is None:
-        return _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim)
-    loop = _Loop(plant, law, trajectory)
+        return _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim, model)
+    ctl = _Loop(plant, law, trajectory, model=model)
     Ts, nsamples, dec = _sample_grid(opt)
     x = x0.copy()
     rows_t, rows_x, rows_u, rows_r, rows_y = [], [], [], [], []
@@ -99,15 +110,24 @@ def run(plant, law, trajectory, opt, x0):
     uprev = None
     status, t_end = S.OK, opt.duration
     h = Ts / opt.substeps
+    noise = loop.noise(nsamples) if loop is not None else np.zeros((0, 2 * n))
+    delayed: list = []  # commands of the last delay + 1 samples
+    delay = loop.delay if loop is not None else 0
+    advance = getattr(plant.rigid, "advance", None)
     for s in range(nsamples + 1):
         t = s * Ts
-        u, zdot, yn = loop.control(t, x)
+        qm, qdm = loop.measure(x, s, noise) if loop is not None else (None, None)
+        ucmd, zdot, yn = ctl.control(t, x, qm, qdm)
+        delayed.append(ucmd)
+        if len(delayed) > delay + 1:
+            delayed.pop(0)
+        u = np.asarray(plant.applied_torque(x[:n], x[n:2 * n], delayed[0]), dtype=float)  # u_{s-d}, or u_0
         if uprev is not None:
             tv += np.abs(u - uprev)
         uprev = u
-        st = S.check(x, u, lim)
+        st = S.check(x, ucmd, lim)
         if s % dec == 0 or st != S.OK:
-            rows_t.append(t); rows_x.append(x.copy()); rows_u.append(u); rows_r.append(loop.ref[0].copy())
+            rows_t.append(t); rows_x.append(x.copy()); rows_u.append(u); rows_r.append(ctl.ref[0].copy())
             rows_y.append(yn)
         if st != S.OK:
             status, t_end = st, t
@@ -115,12 +135,16 @@ def run(plant, law, trajectory, opt, x0):
         if s == nsamples:
             break
         with np.errstate(all="ignore"):
-            if reference:
-                sol = solve_ivp(lambda _t, y: loop.plant_rhs(y, u), (t, t + Ts), x[:2 * n], method="DOP853",
+            if advance is not None:
+                q1, qd1 = advance(x[:n], x[n:2 * n], u, Ts)  # simulate() refused joint-torque effects
+                xs = np.concatenate([q1, qd1])
+                ok = bool(np.all(np.isfinite(xs)))
+            elif reference:
+                sol = solve_ivp(lambda _t, y: ctl.plant_rhs(y, u), (t, t + Ts), x[:2 * n], method="DOP853",
                                 rtol=rtol, atol=atol)
                 ok, xs = sol.success, (sol.y[:, -1] if sol.success else None)
             else:
-                xs = _rk4(loop, x[:2 * n], u, h, opt.substeps)
+                xs = _rk4(ctl, x[:2 * n], u, h, opt.substeps)
                 ok = bool(np.all(np.isfinite(xs)))
         if not ok:
             status, t_end = S.NONFINITE, t
@@ -128,10 +152,10 @@ def run(plant, law, trajectory, opt, x0):
         x = np.concatenate([xs, x[2 * n:] + Ts * zdot])  # controller state: forward Euler
     return _result(plant, law, trajectory, opt, np.array(rows_t), np.array(rows_x).reshape(len(rows_t), -1),
                    np.array(rows_u).reshape(len(rows_t), n), np.array(rows_r).reshape(len(rows_t), n),
-                   np.array(rows_y), status, t_end, loop.nrhs, nsamples, 0, tv=tv)
+                   np.array(rows_y), status, t_end, ctl.nrhs, nsamples, 0, tv=tv)
 
 
-def _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim):
+def _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim, model=None):
     """Continuous time: SciPy's Radau stepped here (as ``solve_ivp`` does), so that a stop raised in
     the right-hand side (budget, non-finite torque) keeps every row before it. Rows inside a step are
     the solver's dense output (``solve_ivp``'s ``t_eval``); a |q| or |qd| bound crossing is located on
@@ -140,7 +164,8 @@ def _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim):
     from scipy.optimize import brentq
 
     n = plant.n
-    loop = _Loop(plant, law, trajectory, budget=int(RHS_PER_STEP * opt.max_steps * opt.duration) + 1000)
+    loop = _Loop(plant, law, trajectory, budget=int(RHS_PER_STEP * opt.max_steps * opt.duration) + 1000,
+                 model=model)
     nout = int(round(opt.duration * opt.output_rate)) + 1
     t_eval = np.linspace(0.0, opt.duration, nout)
     X = np.empty((nout, x0.size))
@@ -173,9 +198,10 @@ def _continuous(plant, law, trajectory, opt, x0, rtol, atol, lim):
     m = k
     U = np.zeros((m, n)); R = np.zeros((m, n)); yn = np.zeros(m)
     for i in range(m):
-        U[i], _, yn[i] = loop.control(t_eval[i], X[i])
+        ucmd, _, yn[i] = loop.control(t_eval[i], X[i])
+        U[i] = plant.applied_torque(X[i, :n], X[i, n:2 * n], ucmd)
         R[i] = loop.ref[0]
-        st = S.check(X[i], U[i], lim)
+        st = S.check(X[i], ucmd, lim)
         if st != S.OK:
             status, m, t_end = st, i + 1, float(t_eval[i])
             break

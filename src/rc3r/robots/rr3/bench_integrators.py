@@ -28,13 +28,13 @@ __all__ = ["bench_integrators"]
 
 
 @njit(cache=True)
-def _rhs(t, x, thp, law, cp, tp, l2, g0):
+def _rhs(t, x, thp, fx, law, cp, tp, l2, g0):
     n = x.shape[0]
     xdot = np.empty(n)
     u = np.empty(3); ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
     w33 = np.empty((3, 3)); w3 = np.empty(3)
     v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3); ys = np.empty(1)
-    E.closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+    E.closed_loop_rhs(t, x, thp, fx, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
     return xdot
 
 
@@ -42,7 +42,9 @@ def _scipy(spec, x0, t_out, method: str, rtol: float, atol: float):
     p = spec.plant
     cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
     l2, g0 = p.params.lengths[1], p.params.g0
-    args = (p.theta, code, cp, tp, l2, g0)
+    from ...plants import as_plant
+
+    args = (p.theta, as_plant(p).pack(), code, cp, tp, l2, g0)
     _rhs(0.0, x0, *args)  # compile / load before timing
     t0 = time.perf_counter()
     sol = solve_ivp(_rhs, (t_out[0], t_out[-1]), x0, method=method, t_eval=t_out, rtol=rtol, atol=atol,

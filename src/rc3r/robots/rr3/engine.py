@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from ...controllers._kernels import apply_regressor, law_output, law_signals
+from ...plants._kernels import actuate, apply_effects, measure
 from ...simulate.status import HMIN, NOTPD, OK, WORK, check
 from ...trajectory import reference_into
 from . import kernels as K
@@ -46,13 +47,16 @@ def control(law, cp, q, qd, z, ref, l2, g0, u, zdot, Y, th_eff, v, a, r, w):
 
 
 @njit(**_JIT)
-def closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w, ys):
-    """xdot = f(t, x); fills ``u`` and ``ys[0] = ||Y^T r||``. Returns False if the plant M is not PD."""
+def closed_loop_rhs(t, x, thp, fx, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w, ys):
+    """xdot = f(t, x); fills ``u`` with the delivered torque (the law's, through the plant's actuator
+    effects ``fx``) and ``ys[0] = ||Y^T r||``. Returns False if the plant M is not PD."""
     reference_into(tp, t, ref)
     ys[0] = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, xdot[6:], Y, xi, v, a, r, w)
+    actuate(fx, u, u)
+    apply_effects(fx, x[3:6], u, w)  # w (the law's additive term) is free again: the joint torque
     for i in range(3):
         xdot[i] = x[3 + i]
-    return K.forward_dynamics_into(thp, x[0:3], x[3:6], u, l2, g0, xdot[3:6], w33, w3)
+    return K.forward_dynamics_into(thp, x[0:3], x[3:6], w, l2, g0, xdot[3:6], w33, w3)
 
 
 @njit(**_JIT)
@@ -106,7 +110,7 @@ def _lu_solve(LU, piv, b):
 
 
 @njit(**_JIT)
-def _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys):
+def _jacobian(t, x, F0, thp, fx, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys):
     """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x))."""
     n = x.shape[0]
     sqeps = math.sqrt(2.220446049250313e-16)
@@ -114,19 +118,19 @@ def _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33,
         dx = sqeps * max(abs(x[j]), 1e-3)
         xj = x[j]
         x[j] = xj + dx
-        closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+        closed_loop_rhs(t, x, thp, fx, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
         x[j] = xj
         for i in range(n):
             J[i, j] = (Fp[i] - F0[i]) / dx
     dt = sqeps * max(abs(t), 1.0)
-    closed_loop_rhs(t + dt, x, thp, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+    closed_loop_rhs(t + dt, x, thp, fx, law, cp, tp, l2, g0, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
     for i in range(n):
         Ft[i] = (Fp[i] - F0[i]) / dt
     return n + 1
 
 
 @njit(**_JIT)
-def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hmax, lim,
+def integrate_continuous(x0, t_out, thp, fx, law, cp, tp, l2, g0, rtol, atol, h0, hmax, lim,
                          X, U, R, ynorm, jac_reuse, max_steps):
     """Integrate from ``t_out[0]``; store x, u, q_d rows at every ``t_out``.
 
@@ -154,7 +158,7 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
     ys = np.empty(1); u0 = np.empty(3)
     nrhs = 0; nsteps = 0; nrej = 0
     t = t_out[0]
-    ok = closed_loop_rhs(t, x, thp, law, cp, tp, l2, g0, F0, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+    ok = closed_loop_rhs(t, x, thp, fx, law, cp, tp, l2, g0, F0, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
     nrhs += 1
     X[0] = x; U[0] = u; R[0] = ref[0]
     ynorm[0] = ys[0]
@@ -176,7 +180,7 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             h = t_final - t
             last = True
         if jac_age >= jac_reuse:
-            nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+            nrhs += _jacobian(t, x, F0, thp, fx, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
             jac_age = 0
         while True:
             if nsteps + nrej >= max_steps:
@@ -193,7 +197,7 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             _lu_solve(W, piv, k1)
             for i in range(n):
                 tmp[i] = x[i] + 0.5 * h * k1[i]
-            ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3,
+            ok1 = closed_loop_rhs(t + 0.5 * h, tmp, thp, fx, law, cp, tp, l2, g0, F1, u, ref, Y, xi, w33, w3,
                                   v, a, r, w, ys)
             for i in range(n):
                 k2[i] = F1[i] - k1[i]
@@ -201,7 +205,7 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             for i in range(n):
                 k2[i] += k1[i]
                 xnew[i] = x[i] + h * k2[i]
-            ok2 = closed_loop_rhs(t + h, xnew, thp, law, cp, tp, l2, g0, F2, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
+            ok2 = closed_loop_rhs(t + h, xnew, thp, fx, law, cp, tp, l2, g0, F2, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
             nrhs += 2
             for i in range(n):
                 k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
@@ -219,7 +223,7 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
             nrej += 1
             last = False
             if jac_age > 0:  # rejected with an old Jacobian: refresh it first
-                nrhs += _jacobian(t, x, F0, thp, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3,
+                nrhs += _jacobian(t, x, F0, thp, fx, law, cp, tp, l2, g0, J, Ft, Fp, u, ref, Y, xi, w33, w3,
                                   v, a, r, w, ys)
                 jac_age = 0
             h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / 3.0)) if err < 1e300 else 0.1 * h
@@ -265,19 +269,26 @@ def integrate_continuous(x0, t_out, thp, law, cp, tp, l2, g0, rtol, atol, h0, hm
 
 
 @njit(**_JIT)
-def _plant_rhs(x, u, thp, l2, g0, xdot, w33, w3):
+def _plant_rhs(x, u, thp, fx, l2, g0, xdot, w33, w3, tau):
+    """Plant only, under the delivered torque ``u``: the joint torque adds the friction of ``fx``."""
+    apply_effects(fx, x[3:6], u, tau)
     for i in range(3):
         xdot[i] = x[3 + i]
-    return K.forward_dynamics_into(thp, x[0:3], x[3:6], u, l2, g0, xdot[3:6], w33, w3)
+    return K.forward_dynamics_into(thp, x[0:3], x[3:6], tau, l2, g0, xdot[3:6], w33, w3)
 
 
 @njit(**_JIT)
-def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0, lim,
-                      X, U, R, ynorm, tv):
+def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, thp, fx, law, cp, tp, l2, g0, lim,
+                      X, U, R, ynorm, tv, noise, quant, ubuf):
     """Zero-order-hold loop: ``nsamples`` periods of ``Ts`` from sample ``s0`` (t = (s0 + s) Ts, exact
     whatever the chunking); store every ``dec``-th sample.
 
-    ``tv`` (3,) accumulates the total variation of u over all samples.
+    The controller sees the measurement of :func:`rc3r.plants._kernels.measure` (``noise`` rows by
+    global sample index, ``quant`` encoder steps); its torque goes through the delay line ``ubuf``
+    (d + 1, 3) (persistent across chunks: sample k writes row k mod (d + 1) and the plant gets the
+    command of sample k - d, or of sample 0 while k < d) and the actuator effects of ``fx``.
+    The stored ``U`` is the delivered torque; the |u| bound is checked on the command.
+    ``tv`` (3,) accumulates the total variation of the delivered torque over all samples.
     Returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``.
     """
     n = x0.shape[0]
@@ -288,37 +299,47 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, thp, law, cp, tp, l2, g0,
     w33 = np.empty((3, 3)); w3 = np.empty(3)
     v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3)
     k1 = np.empty(6); k2 = np.empty(6); k3 = np.empty(6); k4 = np.empty(6); xs = np.empty(6)
+    qm = np.empty(3); qdm = np.empty(3); ua = np.empty(3); tau = np.empty(3)
+    nd = ubuf.shape[0]  # delay + 1
     h = Ts / nsub
     nrhs = 0
     stored = 0
     for s in range(nsamples + 1):
-        t = (s0 + s) * Ts
+        kk = s0 + s
+        t = kk * Ts
         reference_into(tp, t, ref)
-        yn = control(law, cp, x[0:3], x[3:6], x[6:], ref, l2, g0, u, zdot, Y, xi, v, a, r, w)
+        measure(x, kk, noise, quant, qm, qdm)
+        yn = control(law, cp, qm, qdm, x[6:], ref, l2, g0, u, zdot, Y, xi, v, a, r, w)
+        for i in range(3):
+            ubuf[kk % nd, i] = u[i]
+        row = (kk - nd + 1) % nd if kk >= nd - 1 else 0
+        for i in range(3):
+            ua[i] = ubuf[row, i]
+        actuate(fx, ua, ua)
         if s > 0:
             for i in range(3):
-                tv[i] += abs(u[i] - uprev[i])
+                tv[i] += abs(ua[i] - uprev[i])
         for i in range(3):
-            uprev[i] = u[i]
+            uprev[i] = ua[i]
         st = check(x, u, lim)
         if s % dec == 0 or st != OK:
-            X[stored] = x; U[stored] = u; R[stored] = ref[0]; ynorm[stored] = yn
+            X[stored] = x; U[stored] = ua; R[stored] = ref[0]; ynorm[stored] = yn
             stored += 1
         if st != OK:
             return st, stored, nrhs, s, t
         if s == nsamples:
             break
         for sub in range(nsub):
-            ok = _plant_rhs(x, u, thp, l2, g0, k1, w33, w3)
+            ok = _plant_rhs(x, ua, thp, fx, l2, g0, k1, w33, w3, tau)
             for i in range(6):
                 xs[i] = x[i] + 0.5 * h * k1[i]
-            ok &= _plant_rhs(xs, u, thp, l2, g0, k2, w33, w3)
+            ok &= _plant_rhs(xs, ua, thp, fx, l2, g0, k2, w33, w3, tau)
             for i in range(6):
                 xs[i] = x[i] + 0.5 * h * k2[i]
-            ok &= _plant_rhs(xs, u, thp, l2, g0, k3, w33, w3)
+            ok &= _plant_rhs(xs, ua, thp, fx, l2, g0, k3, w33, w3, tau)
             for i in range(6):
                 xs[i] = x[i] + h * k3[i]
-            ok &= _plant_rhs(xs, u, thp, l2, g0, k4, w33, w3)
+            ok &= _plant_rhs(xs, ua, thp, fx, l2, g0, k4, w33, w3, tau)
             nrhs += 4
             if not ok:
                 return NOTPD, stored, nrhs, s, t
@@ -357,14 +378,15 @@ class FastEngine:
             return True
 
     @staticmethod
-    def continuous(plant, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
+    def continuous(rigid, fx, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
                    max_steps):
-        l2, g0 = plant.params.lengths[1], plant.params.g0
-        return integrate_continuous(x0, t_out, plant.theta, code, cp, tp, l2, g0, rtol, atol, h0, hmax,
+        l2, g0 = rigid.params.lengths[1], rigid.params.g0
+        return integrate_continuous(x0, t_out, rigid.theta, fx, code, cp, tp, l2, g0, rtol, atol, h0, hmax,
                                     lim, X, U, R, yn, jac_reuse, max_steps)
 
     @staticmethod
-    def sampled(plant, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv):
-        l2, g0 = plant.params.lengths[1], plant.params.g0
-        return integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, plant.theta, code, cp, tp, l2, g0, lim,
-                                 X, U, R, yn, tv)
+    def sampled(rigid, fx, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv, noise, quant,
+                ubuf):
+        l2, g0 = rigid.params.lengths[1], rigid.params.g0
+        return integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, rigid.theta, fx, code, cp, tp, l2, g0, lim,
+                                 X, U, R, yn, tv, noise, quant, ubuf)
