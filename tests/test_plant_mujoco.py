@@ -312,6 +312,16 @@ def test_bad_urdfs_are_one_line_urdf_errors(kwargs, match, tmp_path):
     assert "\n" not in str(info.value)
 
 
+def test_missing_mujoco_is_a_one_line_config_error(monkeypatch):
+    import sys
+
+    from rc3r.errors import ConfigError
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco raises ImportError
+    with pytest.raises(ConfigError, match=r"MuJoCo is not installed: pip install 'rc3r\[mujoco\]'"):
+        MujocoRigidBody.from_urdf(CONSISTENT_URDF)
+
+
 def test_wrong_shapes_are_parameter_errors():
     plant = MujocoRigidBody.from_urdf(CONSISTENT_URDF)
     with pytest.raises(ParameterError, match=r"q must have shape \(3,\)"):

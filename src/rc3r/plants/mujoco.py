@@ -1,15 +1,16 @@
 r"""MuJoCo as a second rigid-body engine for the plant: :class:`MujocoRigidBody`.
 
 A URDF is compiled by MuJoCo's own URDF importer (``mujoco.MjModel.from_xml_string``) after
-three edits of its text: ``<visual>`` and ``<collision>`` elements are removed (the plant
-needs no geometry, and meshes would have to be found), a ``<mujoco><compiler .../></mujoco>``
-element fixes the import options (``fusestatic`` merges fixed links, ``balanceinertia="false"``
-so that an inconsistent inertia is **refused**, not silently changed, ``inertiafromgeom="false"``
-so that the URDF's ``<inertial>`` is the only source of mass), every ``<inertial>`` is rewritten
-with its inertia in the link frame (MuJoCo < 4 drops the rotation of the inertial frame), and
-locked joints become ``fixed`` with their value folded into the joint origin. The compiled model is then made a pure
-rigid-body plant: damping, armature, friction loss and stiffness 0, joint limits off, contacts
-(and with them every constraint) disabled, gravity ``(0, 0, -g0)``, MuJoCo's RK4 integrator.
+four edits of its text: ``<visual>`` and ``<collision>`` elements are removed (the plant needs
+no geometry, and meshes would have to be found); a ``<mujoco><compiler .../></mujoco>`` element
+fixes the import options (``fusestatic`` merges fixed links, ``balanceinertia="false"`` so that
+an inconsistent inertia is **refused**, not silently changed, ``inertiafromgeom="false"`` so
+that the URDF's ``<inertial>`` is the only source of mass); every ``<inertial>`` is rewritten
+with its inertia in the link frame (MuJoCo < 4 drops the rotation of the inertial frame); and
+locked joints become ``fixed`` with their value folded into the joint origin. The compiled
+model is then made a pure rigid-body plant: damping, armature, friction loss and stiffness 0,
+joint limits off, contacts (and with them every constraint) disabled, gravity ``(0, 0, -g0)``,
+MuJoCo's RK4 integrator.
 
 What it computes is therefore ``M(q) qdd + c(q, qd) + g(q) = u`` by MuJoCo's algorithms (CRB for
 ``M``, RNE for the bias forces, a sparse ``L^T D L`` solve for ``qdd``), independently of
