@@ -1,16 +1,23 @@
 """The bad-input battery: every command, every kind of mistake, one clean refusal each.
 
-For each case: exit 2, exactly one ``rc3r: error: ...`` line on stderr naming the problem
-(the expected words), no traceback, and an earlier result in ``--out`` left as it was.
-Every case runs with the working directory in a temporary directory, so a command that
-defaults to ``out/...`` cannot touch the checkout. (More cases with their own assertions
-live beside the modules they exercise: ``test_study.py``, ``test_output.py``,
-``test_rr3_urdf.py``, ``test_paper.py``, ``test_campaign.py``.)
+For each case: exit 2, stderr exactly one line, ``rc3r: error: ...``, naming the problem (the
+expected words) -- captured at the file-descriptor level, so a C++ library's ``Error:`` line
+counts -- no Python warning (numpy's ``RuntimeWarning: overflow`` would be printed), no
+traceback, and an earlier result in ``--out`` left as it was. Every case runs with the working
+directory in a temporary directory, so a command that defaults to ``out/...`` cannot touch the
+checkout. (More cases with their own assertions live beside the modules they exercise:
+``test_study.py``, ``test_output.py``, ``test_rr3_urdf.py``, ``test_paper.py``,
+``test_campaign.py``.)
 """
 from __future__ import annotations
 
+import os
 import re
 import shlex
+import stat
+import subprocess
+import sys
+import warnings
 from pathlib import Path
 
 import pytest
@@ -19,6 +26,24 @@ from rc3r.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = (ROOT / "urdf" / "rr3.urdf").read_text()
+PARAMS = (ROOT / "src" / "rc3r" / "robots" / "rr3" / "data" / "rr3.toml").read_text()
+
+#: A regular file that no one may read, root included: procfs refuses reads of a write-only
+#: sysctl (mode 0200) whatever the caller's capabilities (a chmod 000 file does not stop root).
+UNREADABLE = "/proc/sys/vm/drop_caches"
+
+#: A file name over the system's limit (NAME_MAX = 255 bytes): ENAMETOOLONG.
+LONG = "n" * 300
+
+
+def _urdf(old: str, new: str) -> str:
+    assert old in URDF, old
+    return URDF.replace(old, new, 1)
+
+
+def _loop(parent: str, child: str) -> str:
+    return URDF.replace("</robot>", f'  <joint name="loop" type="fixed">\n    <parent link="{parent}" />\n'
+                                    f'    <child link="{child}" />\n  </joint>\n</robot>')
 
 FILES = {
     "empty.urdf": "",
@@ -54,9 +79,25 @@ FILES = {
     "box_str.toml": "[delta]\nmass = \"lots\"\n",
     "box_link.toml": "[[link]]\nindex = 9\nm = [0, 1]\n",
     "params_key.toml": "[link1]\nmasss = 1\n",
+    # urdfdom's errors (it writes "Error: ..." lines on fd 2 beside rc3r's own line)
+    "dangling.urdf": _urdf('<parent link="link2" />', '<parent link="nolink" />'),
+    "duplink.urdf": _urdf('<link name="tool" />', '<link name="tool" />\n  <link name="tool" />'),
+    "tworoots.urdf": _urdf('<child link="tool" />', '<child link="link1" />'),
+    "cycle.urdf": _loop("tool", "base_link"),  # base_link -> ... -> tool -> base_link: no root
+    # numbers that overflow the arithmetic (numpy's RuntimeWarning lines, then exit 70 on main)
+    "bigorigin.urdf": re.sub(r'(<joint name="joint2".*?<origin xyz=")[^"]*"', r'\g<1>1e300 0 0"', URDF, count=1,
+                             flags=re.S),
+    "bigmass.urdf": re.sub(r'<mass value="[^"]*"', '<mass value="1e300"', URDF, count=1),
+    "box_big.toml": "[delta]\nmass = [0, 1e300]\n",
+    "params_big.toml": PARAMS.replace("mass = 10.0", "mass = 1e300", 1),
+    # parameter files with a key rc3r would ignore
+    "params_top.toml": "colour = \"red\"\n" + PARAMS,
+    "params_link.toml": PARAMS.replace("mass = 10.0", "mass = 10.0\nmas = 1.0", 1),
+    "params_inertia.toml": PARAMS.replace("ixx = 0.5,", "ixx = 0.5, ixq = 1.0,", 1),
 }
 
-# (id, argv with {d} = the files' directory and {out} = an earlier result directory, expected words)
+# (id, argv with {d} = the files' directory, {out} = an earlier result directory, {t} = a directory of
+# files that must not be replaced (_targets), expected words)
 CASES = [
     # verify-model
     ("vm-missing", "verify-model --urdf {d}/nope.urdf", "not found"),
@@ -80,10 +121,59 @@ CASES = [
     ("vm-robot", "verify-model --robot nosuch", "nosuch"),
     ("vm-generic", "verify-model --generic", "--generic needs --urdf"),
     # make-urdf
-    ("mu-missing", "make-urdf --params {d}/nope.toml --out {d}/x.urdf", "not found"),
-    ("mu-malformed", "make-urdf --params {d}/bad.toml --out {d}/x.urdf", "malformed TOML"),
-    ("mu-binary", "make-urdf --params {d}/binary.toml --out {d}/x.urdf", "not a text file"),
-    ("mu-devzero", "make-urdf --params /dev/zero --out {d}/x.urdf", "not a regular file"),
+    ("mu-missing", "make-urdf --params {d}/nope.toml --out {t}/x.urdf", "not found"),
+    ("mu-malformed", "make-urdf --params {d}/bad.toml --out {t}/x.urdf", "malformed TOML"),
+    ("mu-binary", "make-urdf --params {d}/binary.toml --out {t}/x.urdf", "not a text file"),
+    ("mu-devzero", "make-urdf --params /dev/zero --out {t}/x.urdf", "not a regular file"),
+    # URDFs urdfdom refuses (its stderr caught and folded into the one line), on every load path
+    ("vm-dangling", "verify-model --urdf {d}/dangling.urdf", "parent link [nolink] of joint [joint3] not found"),
+    ("vm-generic-dangling", "verify-model --generic --urdf {d}/dangling.urdf", "parent link [nolink]"),
+    ("bd-urdf-dangling", "bounds --urdf {d}/dangling.urdf", "parent link [nolink]"),
+    ("run-plant-dangling", "run --plant {d}/dangling.urdf --out {out}", "parent link [nolink]"),
+    ("vm-duplink", "verify-model --urdf {d}/duplink.urdf", "link 'tool' is not unique"),
+    ("vm-generic-duplink", "verify-model --generic --urdf {d}/duplink.urdf", "link 'tool' is not unique"),
+    ("vm-tworoots", "verify-model --urdf {d}/tworoots.urdf", "Two root links"),
+    ("vm-cycle", "verify-model --urdf {d}/cycle.urdf", "No root link"),
+    ("vm-generic-cycle", "verify-model --generic --urdf {d}/cycle.urdf", "No root link"),
+    # magnitudes beyond MAX_MAGNITUDE (1e12): refused at the edge, no overflow warning
+    ("vm-bigorigin", "verify-model --urdf {d}/bigorigin.urdf", "beyond 1e+12"),
+    ("vm-generic-bigorigin", "verify-model --generic --urdf {d}/bigorigin.urdf", "magnitude <= 1e+12"),
+    ("vm-bigmass", "verify-model --urdf {d}/bigmass.urdf", "beyond 1e+12"),
+    ("vm-generic-bigmass", "verify-model --generic --urdf {d}/bigmass.urdf", "magnitude <= 1e+12"),
+    ("bd-urdf-bigmass", "bounds --urdf {d}/bigmass.urdf", "beyond 1e+12"),
+    ("bd-box-big", "bounds --box {d}/box_big.toml", "beyond 1e+12"),
+    ("bd-box-big-json", "bounds --box {d}/box_big.toml --json", "beyond 1e+12"),
+    ("run-box-big", "run --perturbed --box {d}/box_big.toml --out {out}", "beyond 1e+12"),
+    ("mu-big", "make-urdf --params {d}/params_big.toml --out {t}/x.urdf", "link 1 mass 1e+300 is beyond"),
+    # files that cannot be read or named (exit 70 on main)
+    ("vm-unreadable", f"verify-model --urdf {UNREADABLE}", "Permission denied"),
+    ("vm-generic-unreadable", f"verify-model --generic --urdf {UNREADABLE}", "Permission denied"),
+    ("bd-unreadable", f"bounds --urdf {UNREADABLE}", "Permission denied"),
+    ("vm-generic-dir", "verify-model --generic --urdf {d}", "not a file"),
+    ("vm-longname", f"verify-model --urdf {{d}}/{LONG}.urdf", "File name too long"),
+    ("vm-generic-longname", f"verify-model --generic --urdf {{d}}/{LONG}.urdf", "File name too long"),
+    ("bd-longname", f"bounds --urdf {{d}}/{LONG}.urdf", "File name too long"),
+    ("vm-samples-huge", "verify-model --samples 100000000000", "more than 100000"),
+    # make-urdf: unknown keys, and --out that is not a file rc3r may replace
+    ("mu-key-top", "make-urdf --params {d}/params_top.toml --out {t}/x.urdf", "unknown key 'colour' in the top level"),
+    ("mu-key-link", "make-urdf --params {d}/params_link.toml --out {t}/x.urdf", "unknown key 'mas' in link 1"),
+    ("mu-key-inertia", "make-urdf --params {d}/params_inertia.toml --out {t}/x.urdf",
+     "unknown key 'ixq' in link 1 inertia"),
+    ("mu-key-old", "make-urdf --params {d}/params_key.toml --out {t}/x.urdf", "unknown key 'link1'"),
+    ("mu-out-dir", "make-urdf --out {d}/dir.toml", "is a directory"),
+    ("mu-out-empty", "make-urdf --out ''", "is empty"),
+    ("mu-out-root", "make-urdf --out /", "is a directory"),
+    ("mu-out-longname", f"make-urdf --out {{d}}/{LONG}.urdf", "File name too long"),
+    ("mu-out-longtmp", f"make-urdf --out {{d}}/{LONG[:250]}.urdf", "File name too long"),  # .<name>.XXXXXXXX.urdf
+    ("mu-out-symlink", "make-urdf --out {t}/link.urdf", "symbolic link"),
+    ("mu-out-fifo", "make-urdf --out {t}/fifo.urdf", "not a regular file"),
+    ("mu-out-chardev", "make-urdf --out {t}/chardev.urdf", "not a regular file"),
+    ("mu-out-proc", "make-urdf --out /proc/rc3r.urdf", "cannot write"),
+    # run --out that cannot be written, found before any work (progress lines would be a 2nd line)
+    ("out-proc", "run --duration 0.1 --out /proc/rc3r-out", "cannot write in /proc"),
+    ("out-under-file", "run --duration 0.1 --out {d}/afile/run", "Not a directory"),
+    ("out-longname", f"run --duration 0.1 --out {{d}}/{LONG}", "File name too long"),
+    ("out-longlock", f"run --duration 0.1 --out {{d}}/{LONG[:250]}", "File name too long"),
     # bounds
     ("bd-missing", "bounds --box {d}/nope.toml", "not found"),
     ("bd-malformed", "bounds --box {d}/bad.toml", "malformed TOML"),
@@ -188,6 +278,10 @@ def test_the_battery_has_at_least_80_cases():
     assert len(CASES) >= 80 and len({c[0] for c in CASES}) == len(CASES)
 
 
+#: Warnings Python does not show by default (outside __main__): not printed to a user.
+_HIDDEN = (DeprecationWarning, PendingDeprecationWarning, ImportWarning)
+
+
 @pytest.fixture(scope="module")
 def bad_files(tmp_path_factory):
     d = tmp_path_factory.mktemp("bad")
@@ -203,22 +297,85 @@ def bad_files(tmp_path_factory):
     return d
 
 
+def _targets(t: Path) -> Path:
+    """Files make-urdf must never replace ({t} of a case): a symbolic link, a FIFO, a character device;
+    a refused make-urdf --out {t}/x.urdf must not write x.urdf there either."""
+    t.mkdir()
+    (t / "target.urdf").write_text("a file a symbolic link points to")
+    (t / "link.urdf").symlink_to(t / "target.urdf")
+    os.mkfifo(t / "fifo.urdf")
+    try:  # a character device like /dev/null (mknod needs CAP_MKNOD; a FIFO stands in otherwise)
+        os.mknod(t / "chardev.urdf", 0o644 | stat.S_IFCHR, os.makedev(1, 3))
+    except OSError:
+        os.mkfifo(t / "chardev.urdf")
+    return t
+
+
+def _untouched(d: Path, t: Path) -> None:
+    """The targets that must never be replaced are as they were, and make-urdf wrote nothing."""
+    assert (t / "link.urdf").is_symlink() and (t / "target.urdf").read_text() == "a file a symbolic link points to"
+    assert stat.S_ISFIFO(os.lstat(t / "fifo.urdf").st_mode)
+    assert not stat.S_ISREG(os.lstat(t / "chardev.urdf").st_mode)
+    assert sorted(p.name for p in t.iterdir()) == ["chardev.urdf", "fifo.urdf", "link.urdf", "target.urdf"]
+    assert (d / "dir.toml").is_dir() and list((d / "dir.toml").iterdir()) == []
+
+
 @pytest.mark.parametrize("case, argv, words", CASES, ids=[c[0] for c in CASES])
-def test_bad_input_is_one_clean_line(case, argv, words, bad_files, tmp_path, monkeypatch, capsys):
+def test_bad_input_is_one_clean_line(case, argv, words, bad_files, tmp_path, monkeypatch, capfd):
+    if "/proc/" in argv and not os.path.isdir("/proc/sys"):
+        pytest.skip("needs Linux procfs")
     work = tmp_path / "cwd"
     work.mkdir()
     monkeypatch.chdir(work)
     out = tmp_path / "earlier"
     out.mkdir()
     (out / "metrics.json").write_text('{"earlier": true}')
-    args = [a.format(d=bad_files, out=out) for a in shlex.split(argv)]
-    code = main(args)
-    err = capsys.readouterr().err
-    errors = [ln for ln in err.splitlines() if ln.startswith("rc3r: error:")]
+    t = _targets(tmp_path / "targets")
+    args = [a.format(d=bad_files, out=out, t=t) for a in shlex.split(argv)]
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(args)
+    err = capfd.readouterr().err
+    shown = [f"{w.category.__name__}: {w.message}" for w in caught if not issubclass(w.category, _HIDDEN)]
     assert code == 2, (case, code, err)
-    assert len(errors) == 1 and words in errors[0], (case, err)
+    assert err.count("\n") == 1 and err.startswith("rc3r: error: ") and words in err, (case, err)
+    assert not shown, (case, shown)
     assert "Traceback" not in err and "internal error" not in err
     assert (out / "metrics.json").read_text() == '{"earlier": true}'
     assert sorted(p.name for p in out.iterdir()) == ["metrics.json"]
     assert (bad_files / "foreign" / "thesis.tex").read_text() == "not rc3r's"
     assert list(work.iterdir()) == []
+    _untouched(bad_files, t)
+
+
+def test_bounds_never_prints_a_non_finite_number(monkeypatch, capsys):
+    """Whatever overflows inside the bounds (here the certified radius of the paper's theta0, made
+    infinite) is refused in one line; stdout stays empty: no ``Infinity`` in the JSON, which is not
+    JSON. On main this printed ``"rho": Infinity`` and exited 0."""
+    import rc3r.cli.bounds as cli_bounds
+
+    real = cli_bounds.certified_radius
+    monkeypatch.setattr(cli_bounds, "certified_radius", lambda b, t: (float("inf"), real(b, t)[1]))
+    for extra in ([], ["--json"]):
+        assert main(["bounds", *extra]) == 2
+        cap = capsys.readouterr()
+        assert cap.out == "" and cap.err.count("\n") == 1, cap
+        assert "paper_theta0_certified.rho is not finite" in cap.err
+
+
+def test_urdfdom_lines_never_reach_the_terminal():
+    """End to end in a fresh process (the real file descriptor 2, no pytest capture): a URDF with a
+    dangling parent gives rc3r's one line only, with urdfdom's reason folded in. On main urdfdom's
+    two lines ("Error: Failed to build tree ...", "at line 262 in .../model.cpp") came first."""
+    path = Path(os.environ.get("TMPDIR", "/tmp")) / f"rc3r-dangling-{os.getpid()}.urdf"
+    path.write_text(FILES["dangling.urdf"])
+    try:
+        p = subprocess.run([sys.executable, "-c", "import sys; from rc3r.cli import main; sys.exit(main(sys.argv[1:]))",
+                            "verify-model", "--generic", "--urdf", str(path)], capture_output=True, text=True,
+                           timeout=120)
+    finally:
+        path.unlink()
+    assert p.returncode == 2 and p.stdout == "", p
+    assert p.stderr.count("\n") == 1 and p.stderr.startswith("rc3r: error: Pinocchio cannot read URDF"), p.stderr
+    assert "parent link [nolink] of joint [joint3] not found" in p.stderr and "model.cpp" not in p.stderr

@@ -1,14 +1,23 @@
-"""Atomic file output: results already written are never half-overwritten.
+"""Atomic file output, TOML reading, and the edges where files enter rc3r.
 
 Every file rc3r writes goes to a temporary file in the same directory first and
 is then renamed over the target (``os.replace`` is atomic on POSIX), so an
-interrupted run leaves either the old file or the new one, never a torn one.
+interrupted run leaves either the old file or the new one, never a torn one. Only a
+regular file (or nothing) is ever replaced: a directory, a device, a FIFO or a
+symbolic link at the target is refused (:func:`file_target_problem`). JSON is
+written strict (non-finite floats as ``null``). :func:`native_stderr` keeps what C++
+libraries (urdfdom, under Pinocchio) print on file descriptor 2 out of the user's
+terminal, so a refusal stays one line; :data:`MAX_MAGNITUDE` bounds the numbers read
+from URDF, parameter and box files.
 """
 from __future__ import annotations
 
+import errno
 import json
+import math
 import os
 import stat
+import sys
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -22,7 +31,57 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # Python 3.10: the same parser, as the package tomli
     import tomli as tomllib
 
-__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml", "tomllib", "apply_umask", "floats"]
+__all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml", "tomllib",
+           "apply_umask", "floats", "strict_json", "file_target_problem", "native_stderr", "NativeStderr",
+           "MAX_MAGNITUDE", "MAGNITUDE_NOTE", "too_large", "number_problem", "require_file"]
+
+#: Largest magnitude of a number read from a URDF (origins, axes, masses, inertias), a parameter
+#: file or a box file, in SI units. Beyond it products and squares of the dynamics (up to the 4th
+#: power of a length times a mass, ~1e60) would approach double-precision overflow (1.8e308) in
+#: the bounds and the closed forms; no robot comes near it (a 1e12 kg mass, a 1e12 m link).
+MAX_MAGNITUDE = 1e12
+
+#: How messages state the bound on numbers read from files.
+MAGNITUDE_NOTE = f" (finite, magnitude <= {MAX_MAGNITUDE:g})"
+
+
+def too_large(x) -> bool:
+    """Whether the number ``x`` is not finite or beyond :data:`MAX_MAGNITUDE` in magnitude."""
+    return not abs(float(x)) <= MAX_MAGNITUDE
+
+
+def number_problem(text: str, count: int | None = None, bounded: bool = True) -> str | None:
+    """Why the attribute ``text`` is not ``count`` (any number if None) whitespace-separated numbers,
+    finite and within :data:`MAX_MAGNITUDE` when ``bounded``; None if it is.
+
+    >>> number_problem("0 1e300 0", 3)
+    'beyond 1e+12 in magnitude'
+    """
+    try:
+        values = [float(x) for x in text.split()]
+    except ValueError:
+        return "not a finite number"
+    if count is not None and len(values) != count:
+        return f"not {count} numbers"
+    if bounded and any(not math.isfinite(x) for x in values):
+        return "not a finite number"
+    if bounded and any(too_large(x) for x in values):
+        return f"beyond {MAX_MAGNITUDE:g} in magnitude"
+    return None
+
+
+def require_file(path: str | Path, what: str, error=ConfigError) -> Path:
+    """``path`` as a Path if it names a regular file; else raise ``error`` (one line): ``what`` not
+    found, not a file (a directory, a device), or not usable (a name too long, a file on the way)."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise error(f"{what} not found: {path}") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"{what} path is not a file: {path}")
+    return Path(path)
 
 
 def floats(x):
@@ -45,12 +104,49 @@ def apply_umask(path: str | Path, directory: bool = False) -> None:
     os.chmod(path, (0o777 if directory else 0o666) & ~_umask())
 
 
+def file_target_problem(path: str | Path) -> str | None:
+    """Why a file cannot be (re)written at ``path`` by :func:`atomic_path`, or None if it can.
+
+    Refused: an empty path, a directory (``/`` included), a symbolic link, a device, FIFO or
+    socket (renaming a regular file over ``/dev/null`` as root would destroy the device), and a
+    path the system cannot name (too long, a file used as a directory ...).
+    """
+    if str(path).strip() in ("", "."):
+        return "is empty; give a file name"
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:  # ENAMETOOLONG, ENOTDIR, ELOOP, EACCES
+        return f"cannot be used: {exc.strerror or exc}"
+    if stat.S_ISLNK(st.st_mode):
+        return "is a symbolic link; refusing to replace it (give the file it points to, or another name)"
+    if stat.S_ISDIR(st.st_mode):
+        return "is a directory; give a file name"
+    if not stat.S_ISREG(st.st_mode):
+        return "is not a regular file (a device, FIFO or socket); refusing to replace it"
+    return None
+
+
 @contextmanager
 def atomic_path(path: str | Path, suffix: str = ""):
-    """Yield a temporary path beside ``path``; rename it onto ``path`` on success."""
+    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+
+    Raises
+    ------
+    ConfigError
+        ``path`` is not a regular file or a new name (:func:`file_target_problem`), or its
+        directory cannot be created or written (name too long, read-only, not a directory).
+    """
+    problem = file_target_problem(path)
+    if problem:
+        raise ConfigError(f"output {path} {problem}")
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or path.suffix, dir=path.parent)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix or path.suffix, dir=path.parent)
+    except OSError as exc:
+        raise ConfigError(f"cannot write {path}: {exc.strerror or exc}") from None
     os.close(fd)
     try:
         yield Path(tmp)
@@ -69,9 +165,21 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
     return Path(path)
 
 
+def strict_json(obj):
+    """``obj`` with every non-finite float (NaN, +-inf) replaced by None: JSON without ``NaN`` or
+    ``Infinity``, which are not JSON and which strict parsers (``jq``, browsers) refuse."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: strict_json(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [strict_json(v) for v in obj]
+    return obj
+
+
 def atomic_write_json(path: str | Path, obj) -> Path:
-    """Write ``obj`` as indented JSON to ``path`` atomically."""
-    return atomic_write_text(path, json.dumps(obj, indent=2, allow_nan=True) + "\n")
+    """Write ``obj`` as indented strict JSON to ``path`` atomically (non-finite floats as ``null``)."""
+    return atomic_write_text(path, json.dumps(strict_json(obj), indent=2, allow_nan=False) + "\n")
 
 
 def atomic_savefig(fig, path: str | Path, **kwargs) -> Path:
@@ -113,3 +221,70 @@ def read_toml(path: str | Path, what: str) -> dict:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: malformed TOML: {exc}") from None
+
+
+class NativeStderr:
+    """What native code wrote on file descriptor 2 inside :func:`native_stderr`.
+
+    Attributes
+    ----------
+    text : str
+        Everything written (at most 64 kB kept), available after the block.
+    """
+
+    text: str = ""
+
+    @property
+    def first_line(self) -> str:
+        """The first non-blank line, without urdfdom's ``Error:`` prefix, cut after its first sentence
+        (urdfdom's first line goes on with advice; no final full stop) and at 200 characters; ``""``
+        if nothing was written."""
+        line = next((ln for ln in self.text.splitlines() if ln.strip()), "")
+        line = " ".join(line.split())
+        for prefix in ("Error:", "error:", "Warning:"):
+            if line.startswith(prefix):
+                line = line[len(prefix):].strip()
+        line = line.partition(". ")[0].rstrip(".")
+        return line if len(line) <= 200 else line[:197] + "..."
+
+    def folded(self, message: str, detail: str = "") -> str:
+        """``message: <first line> (detail)``, or ``message: detail`` when nothing was caught."""
+        if not self.first_line:
+            return f"{message}: {detail}" if detail else message
+        return f"{message}: {self.first_line}" + (f" ({detail})" if detail else "")
+
+
+@contextmanager
+def native_stderr():
+    """Catch what C/C++ code (urdfdom's ``Error: ...`` lines) writes on file descriptor 2 while the
+    block runs; yield a :class:`NativeStderr` whose ``text`` holds it afterwards.
+
+    File descriptor 2 is pointed at an anonymous temporary file with ``dup2`` and restored on
+    exit, whatever happens in the block (Python's ``sys.stderr`` is flushed first so nothing of it
+    is caught by mistake). The redirection is process-wide: a thread writing to fd 2 meanwhile is
+    caught too (rc3r parses URDFs in the main thread). Without a file descriptor 2 (closed), the
+    block runs as it is.
+    """
+    cap = NativeStderr()
+    try:
+        sys.stderr.flush()
+    except (AttributeError, OSError, ValueError):
+        pass
+    try:
+        saved = os.dup(2)
+    except OSError as exc:
+        if exc.errno != errno.EBADF:
+            raise
+        yield cap
+        return
+    try:
+        with tempfile.TemporaryFile() as sink:
+            os.dup2(sink.fileno(), 2)
+            try:
+                yield cap
+            finally:
+                os.dup2(saved, 2)
+                sink.seek(0)
+                cap.text = sink.read(1 << 16).decode(errors="replace")
+    finally:
+        os.close(saved)

@@ -2,7 +2,11 @@
 from __future__ import annotations
 
 import json
+import math
 
+import numpy as np
+
+from ..errors import ParameterError
 from ..io import floats as _floats
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..study import resolve_box
@@ -15,28 +19,61 @@ CLI_SAMPLES = 100_000
 CLI_SEED = 0
 
 
+def _first_non_finite(obj, where: str = "") -> str | None:
+    """The key path of the first NaN or infinity in a nested dict/list of numbers, or None."""
+    if isinstance(obj, float):
+        return None if math.isfinite(obj) else where
+    items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, list | tuple) else ()
+    for key, value in items:
+        found = _first_non_finite(value, f"{where}.{key}" if where else str(key))
+        if found is not None:
+            return found
+    return None
+
+
+def _compute(robot, box):
+    """Both methods and their sampled checks, with numpy's floating-point warnings silenced: a box or
+    robot whose numbers overflow gives a one-line refusal (the caller checks every result is finite),
+    never ``RuntimeWarning`` lines."""
+    try:
+        with np.errstate(all="ignore"):
+            a = paper_bounds(robot, box)
+            b = certified_bounds(robot, box)
+            s_b = sampled_rho_detail(robot, box, b.theta0, n=CLI_SAMPLES, seed=CLI_SEED)
+            s_a = sampled_rho_detail(robot, box, a.theta0, n=CLI_SAMPLES, seed=CLI_SEED)
+            rho_a_box, rho_a_i = certified_radius(b, a.theta0)
+    except (np.linalg.LinAlgError, FloatingPointError, OverflowError) as exc:
+        raise ParameterError(f"the bounds of box {box.source} on robot {robot.urdf} cannot be computed in double "
+                             f"precision ({type(exc).__name__}: {exc}); are its numbers in SI units?") from None
+    return a, b, s_a, s_b, rho_a_box, rho_a_i
+
+
 def cmd_bounds(args) -> int:
-    """``rc3r bounds [--box FILE] [--urdf PATH] [--json]``: both methods side by side."""
+    """``rc3r bounds [--box FILE] [--urdf PATH] [--json]``: both methods side by side.
+
+    Every number printed is finite: a result that overflowed (NaN, infinity) is refused in one line
+    naming it, and the JSON is strict (``allow_nan=False``).
+    """
     robot = robot_class(DEFAULT_ROBOT).from_urdf(getattr(args, "urdf", None))
     box = resolve_box(robot, getattr(args, "box", None))
-    a = paper_bounds(robot, box)
-    b = certified_bounds(robot, box)
-    s_b = sampled_rho_detail(robot, box, b.theta0, n=CLI_SAMPLES, seed=CLI_SEED)
-    s_a = sampled_rho_detail(robot, box, a.theta0, n=CLI_SAMPLES, seed=CLI_SEED)
-    rho_a_box, rho_a_i = certified_radius(b, a.theta0)
+    a, b, s_a, s_b, rho_a_box, rho_a_i = _compute(robot, box)
+    out = {
+        "nominal": {"urdf": robot.urdf, "theta": _floats(robot.theta)},
+        "box": box.to_dict(),
+        "paper": a.to_dict(),
+        "certified": b.to_dict(),
+        "sampled_certified": s_b.to_dict(),
+        "sampled_paper": s_a.to_dict(),
+        "paper_theta0_certified": {"rho": rho_a_box, "rho_i": _floats(rho_a_i)},
+    }
+    for key in ("paper", "certified"):
+        out[key].pop("box")
+    bad = _first_non_finite(out)
+    if bad is not None:
+        raise ParameterError(f"the bounds of box {box.source} on robot {robot.urdf} overflow double precision "
+                             f"({bad} is not finite); are its numbers in SI units?")
     if getattr(args, "json", False):
-        out = {
-            "nominal": {"urdf": robot.urdf, "theta": _floats(robot.theta)},
-            "box": box.to_dict(),
-            "paper": a.to_dict(),
-            "certified": b.to_dict(),
-            "sampled_certified": s_b.to_dict(),
-            "sampled_paper": s_a.to_dict(),
-            "paper_theta0_certified": {"rho": rho_a_box, "rho_i": _floats(rho_a_i)},
-        }
-        for key in ("paper", "certified"):
-            out[key].pop("box")
-        print(json.dumps(out, indent=2))
+        print(json.dumps(out, indent=2, allow_nan=False))
         return EXIT["ok"]
     print(f"nominal robot: {robot.urdf}")
     print(f"box: {box.source}")

@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 
-from ..errors import ConfigError, ParameterError
+from ..errors import ConfigError, ParameterError, UrdfError
+from ..io import file_target_problem
 from ..robots import DEFAULT_ROBOT, load_robot, load_urdf_robot, robot_class
-from ..verify import VerifyReport, verify_model
+from ..verify import IDENTIFIABILITY_RTOL, VerifyReport, verify_model
 from . import EXIT
-
 
 
 def _finite_or_none(x: float):
@@ -36,6 +36,10 @@ def report_to_dict(report: VerifyReport) -> dict:
             for name, c in report.checks.items()
         },
         "warnings": list(report.warnings),
+        "notes": list(report.notes),
+        "theta_order": report.theta_order,
+        "identifiability": {"s_min_over_s1": _finite_or_none(report.identifiability),
+                            "warn_below": IDENTIFIABILITY_RTOL},
         "pass": report.passed,
         "samples": report.samples,
         "seed": report.seed,
@@ -58,7 +62,8 @@ def render_text(report: VerifyReport) -> str:
     for name, c in report.checks.items():
         if c.detail:
             lines.append(f"  {name}: {c.detail}")
-    lines += ["", "theta (paper order, section 3.1.1):"]
+    lines += [f"  note: {note}" for note in report.notes]
+    lines += ["", f"theta ({report.theta_order or 'the robot order'}):"]
     for k in range(0, len(report.theta), 5):
         lines.append("  " + "  ".join(f"th{k + j + 1:<2d} = {x:10.6g}"
                                       for j, x in enumerate(report.theta[k:k + 5])))
@@ -67,7 +72,7 @@ def render_text(report: VerifyReport) -> str:
         lines.append("warnings (do not fail the run):")
         lines += [f"  - {wrn}" for wrn in report.warnings]
     else:
-        lines.append("warnings: none (every link is physically consistent)")
+        lines.append("warnings: none (every link is physically consistent, every base parameter identifiable)")
     failed = [n for n, c in report.checks.items() if not c.passed]
     lines.append("")
     lines.append("PASS: every check passed" if report.passed
@@ -96,8 +101,17 @@ def _require_checkable(robot, urdf) -> None:
                              "(SI units): not a robot the model can be checked on")
 
 
+#: Most random states ``verify-model --samples`` takes: the checks hold every state's regressors
+#: at once (a 7-joint arm's two (samples, 7, ~45) regressors and their stacked least squares,
+#: ~2 GB at this many), and 1e5 states already resolve errors of 1e-15 relative.
+MAX_SAMPLES = 100_000
+
+
 def cmd_verify_model(args) -> int:
     """Print the report (text or one JSON object); exit 0 iff every check passes, else 1."""
+    if args.samples > MAX_SAMPLES:
+        raise ConfigError(f"--samples {args.samples} is more than {MAX_SAMPLES} (the checks hold every state "
+                          "in memory at once); give fewer")
     if args.generic:
         if not args.urdf:
             raise ConfigError("--generic needs --urdf PATH")
@@ -105,7 +119,10 @@ def cmd_verify_model(args) -> int:
     elif args.robot:
         robot = load_robot(args.robot, urdf=args.urdf)
     else:
-        robot = robot_class(DEFAULT_ROBOT).from_urdf(args.urdf)
+        try:
+            robot = robot_class(DEFAULT_ROBOT).from_urdf(args.urdf)
+        except UrdfError as exc:  # another arm: say how to check it
+            raise UrdfError(f"{exc} (any serial arm: rc3r verify-model --generic --urdf {args.urdf})") from None
     _require_checkable(robot, args.urdf)
     report = verify_model(robot, samples=args.samples, seed=args.seed)
     if args.json:
@@ -119,7 +136,14 @@ def cmd_verify_model(args) -> int:
 
 
 def cmd_make_urdf(args) -> int:
-    """Write the URDF of a parameter TOML (default: the robot's nominal parameters)."""
+    """Write the URDF of a parameter TOML (default: the robot's nominal parameters).
+
+    ``--out`` must be a new name or a regular file (never a directory, ``/``, ``''``, a device or
+    a symbolic link: :func:`rc3r.io.file_target_problem`), checked before the parameters are read.
+    """
+    problem = file_target_problem(args.out)
+    if problem:
+        raise ConfigError(f"--out {args.out!r} {problem}")
     out = robot_class(DEFAULT_ROBOT).make_urdf(args.params, args.out)
     print(f"wrote {out}")
     return EXIT["ok"]

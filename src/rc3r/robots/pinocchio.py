@@ -54,6 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, ParameterError, UrdfError
+from ..io import MAGNITUDE_NOTE, native_stderr, number_problem, require_file
 from .base import Robot
 from .base_parameters import (BaseParameters, base_parameters, check_model, physical_issues,
                               standard_parameter_names)
@@ -113,13 +114,9 @@ def _urdf_text(path: Path) -> tuple[str, tuple[str, ...], tuple[tuple[str, str],
     for tag, attrs in _NUMERIC.items():  # urdfdom only warns about these and builds a wrong model
         for el, attr in ((el, a) for el in root.iter(tag) for a in attrs if el.get(a) is not None):
             want = 3 if attr in ("xyz", "rpy") else 1
-            try:
-                ok = len([float(x) for x in el.get(attr).split()]) == want
-            except ValueError:
-                ok = False
-            if not ok:
+            if number_problem(el.get(attr), want, bounded=tag != "limit"):  # 1e300 overflows the arithmetic
                 raise UrdfError(f"malformed URDF {path}: <{tag} {attr}={el.get(attr)!r}> is not "
-                                f"{'3 numbers' if want == 3 else 'a number'}")
+                                f"{'3 numbers' if want == 3 else 'a number'}{'' if tag == 'limit' else MAGNITUDE_NOTE}")
     continuous, mimic = [], []
     for joint in root.iter("joint"):
         if joint.find("mimic") is not None:
@@ -209,15 +206,15 @@ class PinocchioRobot(Robot):
         """
         import pinocchio as pin
 
-        path = Path(path)
-        if not path.is_file():
-            raise UrdfError(f"URDF not found: {path}")
+        path = require_file(path, "URDF", UrdfError)  # not found, not a file, a name too long ...
         text, continuous, mimic = _urdf_text(path)
-        try:
-            model = pin.buildModelFromXML(text)
+        try:  # urdfdom prints its reason on fd 2: caught, and folded into the one line
+            with native_stderr() as cpp:
+                model = pin.buildModelFromXML(text)
         except (RuntimeError, ValueError) as exc:
             msg = str(exc).strip().splitlines()
-            raise UrdfError(f"Pinocchio cannot read URDF {path}: {msg[0] if msg else type(exc).__name__}") from None
+            raise UrdfError(cpp.folded(f"Pinocchio cannot read URDF {path}",
+                                       msg[0] if msg else type(exc).__name__)) from None
         lock = dict(lock or {})
         for joint, leader in mimic:
             if joint not in lock:

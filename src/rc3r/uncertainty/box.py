@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, ParameterError
-from ..io import read_toml
+from ..io import MAX_MAGNITUDE, read_toml
 
 __all__ = ["Box", "parse_box", "load_box", "body_keys", "perturb", "shifted", "PERTURBATIONS"]
 
@@ -61,7 +61,8 @@ class Box:
     Raises
     ------
     ParameterError
-        Wrong shapes, non-finite numbers, or ``lower > upper`` somewhere.
+        Wrong shapes, non-finite numbers or beyond :data:`rc3r.io.MAX_MAGNITUDE`, or
+        ``lower > upper`` somewhere.
     """
 
     lower: np.ndarray
@@ -85,6 +86,10 @@ class Box:
             bad = [names[j] for j in np.flatnonzero(~np.isfinite(arr))]
             if bad:
                 raise ParameterError(f"box {what} delta is not finite for {', '.join(bad)}")
+            big = np.flatnonzero(~(np.abs(arr) <= MAX_MAGNITUDE))
+            if big.size:  # 1e300 would overflow the bounds' squares (theta is quadratic in the parameters)
+                raise ParameterError(f"box {what} delta of {names[big[0]]} is {arr[big[0]]:g}, beyond "
+                                     f"{MAX_MAGNITUDE:g} in magnitude (SI units)")
         bad = np.flatnonzero(lo > hi)
         if bad.size:
             j = bad[0]

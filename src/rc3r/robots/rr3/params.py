@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import ConfigError, ParameterError
-from ...io import read_toml, tomllib
+from ...io import MAX_MAGNITUDE, read_toml, too_large, tomllib
 
 __all__ = [
     "G0",
@@ -173,18 +173,52 @@ class ArmParams:
         return replace(self, **changes)
 
 
+#: Keys of a parameter file: top level, a ``[[link]]`` table (an inertia table has INERTIA_KEYS).
+TOP_KEYS = ("name", "g0", "link")
+LINK_KEYS = ("length", "mass", "com", "inertia")
+
+
+def _known(table, allowed, where: str, source: str) -> None:
+    """Refuse a key of ``table`` not in ``allowed`` (a typo would otherwise be ignored)."""
+    if not isinstance(table, dict):
+        raise ConfigError(f"{source}: {where} must be a table, got {table!r}")
+    unknown = [key for key in table if key not in allowed]
+    if unknown:
+        raise ConfigError(f"{source}: unknown key {unknown[0]!r} in {where} (allowed: {', '.join(allowed)})")
+
+
+def _magnitudes(arm: "ArmParams", source: str) -> "ArmParams":
+    """``arm``, if no number of it is beyond :data:`rc3r.io.MAX_MAGNITUDE` (refused at the file's
+    edge: 1e300 would overflow theta and the URDF's model)."""
+    for k, link in enumerate(arm.links, 1):
+        for what, values in (("length", [link.length]), ("mass", [link.mass]), ("com", link.com),
+                             ("inertia", link.inertia), ("g0", [arm.g0])):
+            big = [x for x in values if too_large(x)]
+            if big:
+                where = "g0" if what == "g0" else f"link {k} {what}"
+                raise ParameterError(f"{source}: {where} {big[0]:g} is beyond {MAX_MAGNITUDE:g} in magnitude "
+                                     "(SI units)")
+    return arm
+
+
 def _params_from_mapping(data: dict, source: str) -> ArmParams:
+    _known(data, TOP_KEYS, "the top level", source)
+    if not isinstance(data.get("name", "rr3"), str):
+        raise ConfigError(f"{source}: name must be a string, got {data['name']!r}")
     try:
         links = []
         for k, entry in enumerate(data["link"], 1):
+            _known(entry, LINK_KEYS, f"link {k}", source)
             inertia = entry["inertia"]
             if isinstance(inertia, dict):
+                _known(inertia, INERTIA_KEYS, f"link {k} inertia", source)
                 missing = [key for key in INERTIA_KEYS if key not in inertia]
                 if missing:
                     raise ConfigError(f"{source}: link {k} inertia lacks {', '.join(missing)}")
                 inertia = [inertia[key] for key in INERTIA_KEYS]
             links.append(LinkParams(entry["length"], entry["mass"], entry["com"], inertia))
-        return ArmParams(tuple(links), g0=data.get("g0", G0), name=data.get("name", "rr3"), source=source)
+        arm = ArmParams(tuple(links), g0=data.get("g0", G0), name=data.get("name", "rr3"), source=source)
+        return _magnitudes(arm, source)
     except KeyError as exc:
         raise ConfigError(f"{source}: missing key {exc.args[0]!r}") from None
     except (TypeError, ValueError) as exc:

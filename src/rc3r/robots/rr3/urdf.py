@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import UrdfError
-from ...io import atomic_write_text
+from ...io import atomic_write_text, native_stderr, number_problem, require_file
 from .params import G0, ArmParams, LinkParams, require_simulable
 
 __all__ = [
@@ -231,14 +231,13 @@ def default_urdf_path() -> Path:
 
 
 def _parse(path: Path) -> ET.Element:
-    if not path.exists():
-        raise UrdfError(f"URDF not found: {path}")
-    if not path.is_file():
-        raise UrdfError(f"URDF path is not a file: {path}")
+    require_file(path, "URDF", UrdfError)  # not found, not a file, a name too long ...
     try:
         root = ET.parse(path).getroot()
     except ET.ParseError as exc:
         raise UrdfError(f"malformed URDF {path}: {exc}") from None
+    except OSError as exc:  # unreadable (permission denied, an I/O error)
+        raise UrdfError(f"cannot read URDF {path}: {exc.strerror or exc}") from None
     if root.tag != "robot":
         raise UrdfError(f"malformed URDF {path}: root element is <{root.tag}>, not <robot>")
     _check_numbers(root, path)
@@ -271,7 +270,7 @@ _REQUIRED = ("mass", "inertia")
 
 
 def _check_numbers(root: ET.Element, path: Path) -> None:
-    """Every number rc3r reads must parse and be finite (urdfdom would drop a NaN silently)."""
+    """Every number rc3r reads must parse, be finite (urdfdom drops a NaN) and within ``MAX_MAGNITUDE``."""
     for parent in root.iter():
         owner = parent.get("name")
         for el in parent:
@@ -282,13 +281,9 @@ def _check_numbers(root: ET.Element, path: Path) -> None:
                     if el.tag in _REQUIRED:  # urdfdom would read a missing inertia entry as 0
                         raise UrdfError(f"malformed URDF {path}: {where} <{el.tag}> has no {attr}=\"...\"")
                     continue
-                try:
-                    ok = all(math.isfinite(float(x)) for x in text.split())
-                except ValueError:
-                    ok = False
-                if not ok:
-                    raise UrdfError(f"malformed URDF {path}: {where} <{el.tag} {attr}=\"{text}\"> "
-                                    "is not a finite number")
+                why = number_problem(text)
+                if why:
+                    raise UrdfError(f"malformed URDF {path}: {where} <{el.tag} {attr}=\"{text}\"> is {why}")
 
 
 def _normalize(root: ET.Element, path: Path) -> str:
@@ -519,10 +514,11 @@ def load_arm(path: str | Path | None = None, g0: float = G0) -> LoadedArm:
     path = Path(path) if path is not None else default_urdf_path()
     root = _parse(path)
     xml = _normalize(root, path)
-    try:
-        model = pin.buildModelFromXML(xml)
+    try:  # urdfdom prints its reason on fd 2: caught, and folded into the one line
+        with native_stderr() as cpp:
+            model = pin.buildModelFromXML(xml)
     except Exception as exc:  # Pinocchio raises std::invalid_argument etc. as generic errors
-        raise UrdfError(f"malformed URDF {path}: Pinocchio: {str(exc).splitlines()[0]}") from None
+        raise UrdfError(cpp.folded(f"malformed URDF {path}", f"Pinocchio: {str(exc).splitlines()[0]}")) from None
     model.gravity.linear = np.array([0.0, 0.0, -float(g0)])
     dh = dh_structure(model, where=str(path))
     params = _dh_params(model, dh, g0, root.get("name", "rr3"))
@@ -533,6 +529,7 @@ def model_from_params(p: ArmParams):
     """Pinocchio model of the arm ``p`` (through :func:`make_urdf`), gravity ``(0, 0, -g0)``."""
     import pinocchio as pin
 
-    model = pin.buildModelFromXML(make_urdf(p))
+    with native_stderr():
+        model = pin.buildModelFromXML(make_urdf(p))
     model.gravity.linear = np.array([0.0, 0.0, -float(p.g0)])
     return model
