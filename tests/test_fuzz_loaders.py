@@ -4,10 +4,16 @@ Each mutation of the committed URDF, of the parameter and box TOML files, and of
 configuration is loaded the way the command line loads it. The property: the loader
 returns a robot / a box / a run specification, or raises :class:`rc3r.errors.Rc3rError`
 (the one-line ``rc3r: error:`` of the command line); never any other exception (a
-traceback for a user). Examples are derandomized, so a failure reproduces.
+traceback for a user), and nothing is printed meanwhile (no C++ line on file descriptor 2,
+no Python warning). Examples are derandomized, so a failure reproduces.
 """
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
+import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -71,13 +77,40 @@ def mutated(draw, text: str):
     return text
 
 
+#: Warnings Python does not show by default (outside __main__): never printed to a user.
+_HIDDEN = (DeprecationWarning, PendingDeprecationWarning, ImportWarning)
+
+
+@contextmanager
+def _fd2():
+    """Everything written on file descriptor 2 meanwhile, C++ included: a trap of the test's own
+    (fd 2 duplicated onto a temporary file), independent of rc3r.io.native_stderr."""
+    sys.stderr.flush()
+    saved, caught = os.dup(2), []
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield caught
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            caught.append(sink.read().decode(errors="replace"))
+
+
 def _clean(load) -> None:
-    try:
-        load()
-    except Rc3rError as exc:
-        event(f"refused: {type(exc).__name__}")  # a clean refusal
-    else:
-        event("loaded")
+    """The loader returns or raises Rc3rError, and prints nothing meanwhile: no C++ line on fd 2
+    (urdfdom's "Error: ..."), no Python warning (numpy's RuntimeWarning: overflow)."""
+    with _fd2() as err, warnings.catch_warnings(record=True) as shown:
+        warnings.simplefilter("always")
+        try:
+            load()
+        except Rc3rError as exc:
+            event(f"refused: {type(exc).__name__}")  # a clean refusal
+        else:
+            event("loaded")
+    assert err == [""], err
+    assert not [f"{w.category.__name__}: {w.message}" for w in shown if not issubclass(w.category, _HIDDEN)]
 
 
 @FUZZ

@@ -270,3 +270,60 @@ def test_breaking_a_stale_lock_never_removes_a_fresh_one(tmp_path, monkeypatch):
         _output._acquire(lock)
     assert lock.read_text() == str(os.getpid()) and lock.stat().st_ino == (tmp_path / "b").stat().st_ino
     assert sorted(p.name for p in tmp_path.iterdir()) == [".r.lock", "b"]
+
+
+# ---- rc3r.io: the native stderr trap, strict JSON, targets a file may not replace -----------------------
+
+
+def test_native_stderr_catches_fd2_and_restores_it(capfd):
+    """What is written on file descriptor 2 inside the block (as C++ does, bypassing sys.stderr) is
+    caught, not shown; fd 2 works again afterwards, also when the block raises."""
+    from rc3r.io import native_stderr
+
+    with native_stderr() as cpp:
+        os.write(2, b"Error:   Failed to build tree: parent link [x] of joint [j] not found.  This is not valid.\n"
+                    b"         at line 262 in model.cpp\n")
+    assert cpp.first_line == "Failed to build tree: parent link [x] of joint [j] not found"
+    assert cpp.folded("malformed URDF u", "Pinocchio: bad") == (
+        "malformed URDF u: Failed to build tree: parent link [x] of joint [j] not found (Pinocchio: bad)")
+    with pytest.raises(RuntimeError), native_stderr() as quiet:
+        os.write(2, b"Error: link 'tool' is not unique.\n")
+        raise RuntimeError
+    assert quiet.first_line == "link 'tool' is not unique"
+    os.write(2, b"after\n")
+    assert capfd.readouterr().err == "after\n"
+    with native_stderr() as nothing:
+        pass
+    assert nothing.folded("m", "d") == "m: d" and nothing.folded("m") == "m"
+
+
+def test_json_files_are_strict(tmp_path):
+    """NaN and infinities become null (they are not JSON: strict parsers refuse them); finite values
+    are unchanged."""
+    from rc3r.io import atomic_write_json
+
+    path = atomic_write_json(tmp_path / "m.json", {"a": float("nan"), "b": [float("inf"), 1.5], "c": (-float("inf"),)})
+
+    def refuse(name):
+        raise AssertionError(f"{name} in strict JSON")
+
+    assert json.loads(path.read_text(), parse_constant=refuse) == {"a": None, "b": [None, 1.5], "c": [None]}
+
+
+def test_atomic_path_never_replaces_what_is_not_a_regular_file(tmp_path):
+    """A symbolic link, a FIFO, a directory: refused, left as they were; a regular file is replaced."""
+    from rc3r.errors import ConfigError
+    from rc3r.io import atomic_write_text
+
+    (tmp_path / "t").write_text("target")
+    (tmp_path / "l").symlink_to(tmp_path / "t")
+    os.mkfifo(tmp_path / "f")
+    (tmp_path / "d").mkdir()
+    for name, needle in (("l", "symbolic link"), ("f", "not a regular file"), ("d", "is a directory")):
+        with pytest.raises(ConfigError, match=needle):
+            atomic_write_text(tmp_path / name, "new")
+    assert (tmp_path / "l").is_symlink() and (tmp_path / "t").read_text() == "target"
+    assert stat.S_ISFIFO(os.lstat(tmp_path / "f").st_mode) and (tmp_path / "d").is_dir()
+    atomic_write_text(tmp_path / "t", "new")
+    assert (tmp_path / "t").read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d", "f", "l", "t"]

@@ -101,9 +101,9 @@ def _require_checkable(robot, urdf) -> None:
                              "(SI units): not a robot the model can be checked on")
 
 
-#: Most random states ``verify-model --samples`` takes: the checks hold every state's regressors
-#: at once (a 7-joint arm's two (samples, 7, ~45) regressors and their stacked least squares,
-#: ~2 GB at this many), and 1e5 states already resolve errors of 1e-15 relative.
+#: Most random states ``verify-model --samples`` takes: the checks hold every state's regressors at
+#: once. Measured for the Panda (7 joints, 43 coefficients): 10^4 states 6.0 s and 350 MB peak,
+#: 2 x 10^4 10.9 s and 445 MB, so about 1.2 GB and a minute at this many (10^11 would be ~1 PB).
 MAX_SAMPLES = 100_000
 
 
