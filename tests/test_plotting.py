@@ -89,3 +89,62 @@ def test_rc3r_run_adaptive_writes_estimate_png_and_the_numbers(tmp_path, capsys)
     assert main(["run", "--perturbed", "--duration", "0.2", "--out", str(other)]) == 0
     assert not (other / "estimate.png").exists()
     assert "parameter_estimate" not in json.loads((other / "metrics.json").read_text())
+
+
+# ---- the paper's theory figures: captions and legends (rc3r paper) ------------------------------
+
+
+def _fake_run(eps=None, n=3, seed=0):
+    """The SimResult fields comparison_figure and boundary_layer_figure read; seeded data."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 1.0, 21)
+    return SimpleNamespace(t=t, q=rng.normal(size=(t.size, n)), e=rng.normal(size=(t.size, n)) * 1e-3,
+                           u=rng.normal(size=(t.size, n)), yt_r_norm=np.abs(rng.normal(size=t.size)),
+                           controller={"eps": eps} if eps is not None else {}, mode="continuous",
+                           options=SimpleNamespace(rate=None))
+
+
+def _paper_figures(monkeypatch, tmp_path):
+    """The figures `rc3r paper` writes from its theory runs, by file name (atomic_savefig captured)."""
+    import rc3r.cli.run as cli_run
+
+    saved = {}
+    monkeypatch.setattr(cli_run, "atomic_savefig", lambda fig, path, **kw: saved.setdefault(path.name, fig))
+    res = {"fbl-ideal": _fake_run(), "robust-ideal": _fake_run(0.5, seed=1), "fbl-perturbed": _fake_run(seed=2),
+           "robust-perturbed": _fake_run(0.5, seed=3), "robust-perturbed-eps0.05": _fake_run(0.05, seed=4)}
+    cli_run._theory_figures(res, tmp_path, "continuous", "continuous")
+    return saved
+
+
+def test_each_comparison_caption_speaks_of_its_own_case_only(monkeypatch, tmp_path):
+    """compare-perturbed's caption says nothing of the ideal case and compare-ideal's nothing of the
+    perturbed one (each figure holds only its case's runs); both captions exist (read from fig.texts)."""
+    figs = _paper_figures(monkeypatch, tmp_path)
+    captions = {name: " ".join(t.get_text() for t in figs[name].texts)
+                for name in ("compare-ideal-continuous.png", "compare-perturbed-continuous.png")}
+    assert "perturbed" in captions["compare-perturbed-continuous.png"].lower()
+    assert "ideal" not in captions["compare-perturbed-continuous.png"].lower()
+    assert "ideal" in captions["compare-ideal-continuous.png"].lower()
+    assert "perturbed" not in captions["compare-ideal-continuous.png"].lower()
+
+
+def test_boundary_layer_legend_names_each_run_once(monkeypatch, tmp_path):
+    """The boundary-layer figure's legend: one entry per run (||Y^T r||) and one for the dashed eps lines;
+    no label repeats the eps value (the old 'eps = 0.5 (boundary layer), eps 0.5'); labels unique. The
+    dashed lines sit at the runs' eps (0.5 and 0.05, the runs' controller values)."""
+    fig = _paper_figures(monkeypatch, tmp_path)["boundary-layer-continuous.png"]
+    labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    assert len(labels) == len(set(labels)) == 3, labels
+    for eps in ("0.5", "0.05"):
+        assert sum(f"eps {eps}" in lb or f"eps = {eps}" in lb for lb in labels) == 1, labels
+    assert sum("dashed" in lb for lb in labels) == 1
+    ax = fig.get_axes()[0]
+    dashed = sorted(ln.get_ydata()[0] for ln in ax.get_lines() if ln.get_linestyle() == "--")
+    assert dashed == [0.05, 0.5]
+
+
+def test_comparison_legend_labels_are_distinct(monkeypatch, tmp_path):
+    """compare-perturbed: FBL, robust eps 0.5 and robust eps 0.05, each once, in the legend."""
+    fig = _paper_figures(monkeypatch, tmp_path)["compare-perturbed-continuous.png"]
+    labels = [t.get_text() for ax in fig.get_axes() if ax.get_legend() for t in ax.get_legend().get_texts()]
+    assert len(labels) == len(set(labels)) == 3, labels

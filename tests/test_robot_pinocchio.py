@@ -354,3 +354,17 @@ def test_generic_3r_gives_the_closed_form_controller_torques(law, rng):
         ua, _, _ = a.torque(closed, q, qd, ref)
         ub, _, _ = b.torque(generic, q, qd, ref)
         assert np.max(np.abs(ua - ub)) <= 1e-9 * max(1.0, np.max(np.abs(ua)))
+
+
+def test_identifiability_of_hand_made_regressors():
+    """identifiability: singular values by hand. Y = diag(2, 1e-6) stacked twice has s = (2 sqrt 2,
+    1e-6 sqrt 2), ratio 5e-7 < 1e-4: one warning naming only the second coefficient (its right singular
+    vector is e_2); diag(2, 0.5) has ratio 0.25: no warning."""
+    from rc3r.robots.base_parameters import IDENTIFIABILITY_RTOL, identifiability
+
+    ratio, warn = identifiability(np.vstack([np.diag([2.0, 1e-6])] * 2), ("a", "b"))
+    assert ratio == pytest.approx(5e-7, rel=1e-12) and ratio < IDENTIFIABILITY_RTOL
+    assert len(warn) == 1 and "1 base-parameter direction(s)" in warn[0] and "(mostly b)" in warn[0]
+    assert "s2/s1 = 5.0e-07" in warn[0]
+    ratio, warn = identifiability(np.diag([2.0, 0.5]), ("a", "b"))
+    assert ratio == pytest.approx(0.25, rel=1e-12) and warn == []

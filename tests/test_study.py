@@ -193,3 +193,90 @@ def test_verify_model_generic_robots_report_base_parameters(capsys):
     assert main(["verify-model", "--robot", "ur5", "--json", "--samples", "30"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["pass"] and d["base_parameters"] == 36
+
+
+# ---- a payload range is unknown to the controller (rc3r run --payload) ---------------------------
+
+
+def test_payload_alone_makes_the_controller_not_know_the_payload(ur5):
+    """`--payload 0:5` without --perturbed: the plant carries 5 kg (the upper end), while the controller's
+    theta_0 is the middle of the range, i.e. theta of the UR5 carrying 2.5 kg (theta is linear in the
+    mass: built here independently by with_payload), and rho > 0 is the range's exact radius; the run
+    is recorded as perturbed. theta_0 differs from the plant's theta by 2.5 kg x B w: far above rounding."""
+    from rc3r.uncertainty.payload import with_payload
+
+    com = (0.0, 0.0, 0.1)
+    spec = build_run(robot="ur5", controller="robust", payload=(0.0, 5.0), payload_com=com, duration=0.01)
+    assert spec.scenario == "perturbed" and spec.name == "robust-perturbed"
+    th0, plant = np.array(spec.model["theta0"]), np.asarray(spec.plant.theta)
+    np.testing.assert_allclose(plant, with_payload(ur5, 5.0, com).theta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(th0, with_payload(ur5, 2.5, com).theta, rtol=0, atol=1e-12)
+    assert np.abs(th0 - plant).max() > 0.1
+    assert spec.model["rho"] == pytest.approx(np.linalg.norm(plant - th0), rel=1e-9)  # an end is attained
+    assert "payload segment" in spec.model["theta_source"]
+
+
+def test_payload_with_explicit_ideal_knowledge(ur5):
+    """[model] theta = "plant" is the explicit exception: the controller gets the loaded plant's theta,
+    the run is ideal."""
+    spec = build_run(robot="ur5", controller="fbl", payload=(0.0, 5.0), config={"model": {"theta": "plant"}},
+                     duration=0.01)
+    assert spec.scenario == "ideal"
+    np.testing.assert_array_equal(spec.model["theta0"], spec.plant.theta)
+
+
+def test_payload_help_says_the_controller_does_not_know_it(capsys):
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "controller does not know it" in text and "implied by --payload" in text
+
+
+# ---- what rc3r run announces -----------------------------------------------------------------------
+
+
+def test_perturbed_run_says_the_perturbation_is_in_the_controller_model(tmp_path, capsys):
+    """`rc3r run --perturbed` names the plant (the nominal robot itself) and the controller's model:
+    theta_0 by the paper's method and rho = 186.813 (the paper's rho, 186.8129, to 6 digits)."""
+    assert main(["run", "--perturbed", "--duration", "0.05", "--out", str(tmp_path / "r")]) == 0
+    line = next(ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("rc3r run:"))
+    assert "plant 'nominal' (the nominal robot)" in line
+    assert "controller model (perturbed): theta_0 by the paper's method (a)" in line
+    assert "rho = 186.813 " in line
+    assert main(["run", "--duration", "0.05", "--out", str(tmp_path / "i")]) == 0
+    line = next(ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("rc3r run:"))
+    assert "controller model = the plant's theta (ideal)" in line
+
+
+# ---- defaults that could not follow the robot: warnings ------------------------------------------
+
+
+def test_degenerate_joint_limits_give_a_moving_default_trajectory_and_a_warning(monkeypatch, tmp_path, capsys):
+    """The double pendulum of example-robot-data has lower = upper = 0 on both joints. Its default
+    trajectory moves each joint by 0.5 rad (q_d(t) = 0.5 sin(t + i pi/3), evaluated by hand at t = 0 and
+    pi/2), build_run records one warning naming both joints, metrics.json keeps it, and `rc3r run`
+    prints it as one `rc3r: warning:` line."""
+    import math
+
+    import rc3r.study as study
+    from rc3r.robots.pinocchio import PinocchioRobot, example_robot_data_dir
+
+    dp = PinocchioRobot.from_urdf(example_robot_data_dir() / "double_pendulum_description/urdf/double_pendulum.urdf")
+    lo, hi = dp.joint_limits
+    assert np.all(lo == 0) and np.all(hi == 0)
+    traj = dp.default_trajectory()
+    for t in (0.0, math.pi / 2):
+        q = np.asarray(traj.evaluate(t)[0]).ravel()
+        np.testing.assert_allclose(q, [0.5 * math.sin(t), 0.5 * math.sin(t + math.pi / 3)], atol=1e-12)
+    real = study.load_robot
+    monkeypatch.setattr(study, "load_robot", lambda name: dp if name == "dp" else real(name))
+    spec = build_run(robot="dp", controller="fbl", duration=0.05, engine="python")
+    assert len(spec.warnings) == 1 and all(j in spec.warnings[0] for j in dp.joint_names)
+    assert "fixed amplitude 0.5" in spec.warnings[0]
+    _, m = execute(spec)
+    assert m["warnings"] == list(spec.warnings)
+    assert not build_run(controller="fbl", duration=0.05).warnings  # the 3R: none
+    assert main(["run", "--robot", "dp", "--controller", "fbl", "--engine", "python", "--duration", "0.05",
+                 "--out", str(tmp_path / "dp")]) == 0
+    warns = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("rc3r: warning:")]
+    assert len(warns) == 1 and "lower >= upper" in warns[0]

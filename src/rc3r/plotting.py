@@ -105,21 +105,31 @@ def boundary_layer_figure(runs: dict, title: str, caption: str = "") -> Figure:
 
     Inside the layer (||Y^T r|| <= eps) the robust term is the linear high gain
     (rho / eps) Y Y^T r; outside it, the unit-vector term of magnitude rho. ``runs`` maps a
-    label to a robust-law :class:`SimResult` (its ``controller`` holds ``eps``).
+    label to a robust-law :class:`SimResult` (its ``controller`` holds ``eps``). The legend has
+    one entry per run (its ``||Y^T r||``) and one entry for every dashed line (the eps of the run of
+    the same colour), so a label that names eps is not repeated.
     """
+    from matplotlib.lines import Line2D
+
     fig = Figure(figsize=(12, 4.6), constrained_layout=True)
     ax = fig.subplots()
+    dashed = False
     for k, (label, res) in enumerate(runs.items()):
         colour = f"C{k}"
         ax.semilogy(res.t[1:], np.maximum(res.yt_r_norm[1:], 1e-12), lw=0.8, color=colour,
                     label=f"||Y^T r||, {label}")
         eps = res.controller.get("eps")
         if isinstance(eps, (int, float)):
-            ax.axhline(eps, color=colour, ls="--", lw=1.0, label=f"eps = {eps:g} (boundary layer), {label}")
+            ax.axhline(eps, color=colour, ls="--", lw=1.0, label="_boundary layer")  # "_": not in the legend
+            dashed = True
     ax.set_xlabel("t [s]")
     ax.set_ylabel("||Y^T r|| (mixed units: each coefficient of theta paired with r [rad/s])", fontsize=8)
     ax.grid(alpha=0.3, which="both")
-    fig.legend(*ax.get_legend_handles_labels(), loc="outside right upper", fontsize=8)  # off the data
+    handles, labels = ax.get_legend_handles_labels()
+    if dashed:
+        handles.append(Line2D([], [], color="0.3", ls="--", lw=1.0))
+        labels.append("dashed: ||Y^T r|| = eps of the run of the same colour (its boundary layer)")
+    fig.legend(handles, labels, loc="outside right upper", fontsize=8)  # off the data
     ax.set_title(title)
     _caption(fig, caption)
     return fig

@@ -9,6 +9,11 @@ and the controller's ``theta_0``, ``rho`` and ``rho_i`` are computed from the
   midpoint of theta(nominal) and theta(p_up); the default for perturbed runs;
 * ``theta = "certified"`` -- centre of the exact ranges over the box;
 * ``theta = "plant"`` -- the plant's own theta (ideal scenarios);
+* a payload (``payload=(lo, hi)``, ``[payload] mass``) is *unknown* to the controller: the
+  run is perturbed whatever ``perturbed`` says, theta_0 is the middle of the exact payload
+  segment and rho its radius, while the plant carries the stated mass (``upper``: hi by
+  default); ``theta = "plant"`` in ``[model]`` is the explicit exception (ideal knowledge of
+  the loaded plant);
 * ``rho = "paper"`` (method (a)), ``"certified"`` (covers the whole box around the
   chosen theta_0), or a number; ``rho_i`` is always the certified per-coefficient
   radius around theta_0.
@@ -42,7 +47,9 @@ class RunSpec:
     """Everything one run needs, resolved: plant, law, trajectory, options, provenance.
 
     ``model`` records the controller's theta_0, rho, rho_i and their sources
-    (``theta_source``, ``rho_source``, ``box``, ``nominal``).
+    (``theta_source``, ``rho_source``, ``box``, ``nominal``); ``warnings`` what the user
+    should know about defaults taken for them (e.g. a default trajectory that could not
+    follow degenerate joint limits), copied into the metrics by :func:`execute`.
     """
 
     name: str
@@ -53,6 +60,7 @@ class RunSpec:
     seed: int
     scenario: str
     model: dict = field(default_factory=dict)
+    warnings: tuple = ()
 
 
 #: Keys a run configuration may hold, per table (docs/control.md).
@@ -63,7 +71,8 @@ CONFIG_KEYS = {
     "plant": ("spec", "urdf", "box"),
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
-    "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "engine", "jac_reuse", "q_max", "qd_max", "u_max"),
+    "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "engine", "jac_reuse",
+                   "max_steps", "q_max", "qd_max", "u_max"),
 }
 
 
@@ -303,6 +312,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     Config keys: ``robot``, ``seed``, ``perturbed``, ``box``, ``[plant]`` (``spec``,
     ``urdf``, legacy ``box``), ``[model]`` (``theta``, ``rho``), ``[controller]``
     (``kind`` and gains), ``[trajectory]``, ``[simulation]`` (docs/control.md).
+    A payload makes the run perturbed unless ``[model] theta = "plant"`` (module docstring).
     """
     cfg = config or {}
     _check_config(cfg, controller)
@@ -317,6 +327,9 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     pay_cfg = dict(cfg.get("payload", {}))
     payload = _payload(payload if payload is not None else pay_cfg.get("mass"),
                        payload_com if payload_com is not None else pay_cfg.get("com"))
+    model_cfg = dict(cfg.get("model", {}))
+    if payload is not None and model_cfg.get("theta") != "plant":
+        perturbed = True  # a payload range is unknown to the controller: it gets theta_0 and rho of the range
     bounds = _Bounds(nominal, box or cfg.get("box") or plant_cfg.get("box"), payload)
     spec = plant or plant_cfg.get("spec", "nominal")
     if "urdf" in plant_cfg and spec == "nominal":
@@ -329,9 +342,13 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         except ValueError:
             pass  # perturb() refuses the spec with its own message
     the_plant = _plant(nominal, bounds, spec, seed)
-    model = _model(LAWS[kind], the_plant, bounds, perturbed, dict(cfg.get("model", {})))
+    model = _model(LAWS[kind], the_plant, bounds, perturbed, model_cfg)
     law = _law(kind, model, ctrl_cfg, eps, dict(cfg.get("gains", {}).get(kind, {})))
-    traj = trajectory_from_config(dict(cfg.get("trajectory", {})), nominal.default_trajectory())
+    traj_cfg = dict(cfg.get("trajectory", {}))
+    traj = trajectory_from_config(traj_cfg, nominal.default_trajectory())
+    warnings = []
+    if traj_cfg.get("kind", "paper") in ("paper", "default"):  # the robot's default trajectory is used
+        warnings += getattr(nominal, "default_trajectory_warnings", list)()
     if traj.n != the_plant.n:
         raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")
     sim = dict(cfg.get("simulation", {}))
@@ -348,7 +365,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     except TypeError as exc:
         raise ConfigError(f"[simulation]: {exc}") from None
     scenario = "perturbed" if perturbed else "ideal"
-    return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model)
+    return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings))
 
 
 def execute(spec: RunSpec) -> tuple[SimResult, dict]:
@@ -356,4 +373,6 @@ def execute(spec: RunSpec) -> tuple[SimResult, dict]:
     res = simulate(spec.plant, spec.law, spec.trajectory, spec.options)
     m = run_metrics(res, seed=spec.seed)
     m.update({"name": spec.name, "scenario": spec.scenario, "model": spec.model})
+    if spec.warnings:
+        m["warnings"] = list(spec.warnings)
     return res, m

@@ -6,8 +6,18 @@ Pinocchio's rigid-body algorithms on the robot's own Pinocchio model
 (:attr:`Robot.model`) at random states. For the paper's arm that proves the
 closed forms of :mod:`rc3r.robots.rr3` right. Each comparison is a :class:`Check`;
 a run passes iff every check passes. Physical-consistency problems of the
-parameters (:meth:`Robot.physical_issues`) are reported as warnings and never fail
-a run.
+parameters (:meth:`Robot.physical_issues`) and barely identifiable base parameters
+(:data:`IDENTIFIABILITY_RTOL`) are reported as warnings and never fail a run.
+
+A robot whose M, C and g *are* Pinocchio's ``crba``, ``computeCoriolisMatrix`` and
+``computeGeneralizedGravity`` on its own model (``model_terms_are_pinocchio``, e.g.
+:class:`~rc3r.robots.pinocchio.PinocchioRobot`) would compare Pinocchio with itself
+there (error exactly 0: checks that cannot fail). For it those three checks are
+replaced by M, C and g rebuilt from the robot's regressor (``Y theta``, a separate
+compiled kernel) against Pinocchio, and the report says so (``notes``). Every robot
+also gets two checks that need no reference model: the energy identity along a
+simulated motion and the skew symmetry of ``dM/dt - 2 C`` with ``dM/dt`` by finite
+differences of the robot's own M.
 
 Error measure (defined once, here and in ``docs/conventions.md``): for a value
 ``x`` and a reference ``r`` (all entries at all samples of one check)
@@ -23,15 +33,21 @@ compared absolutely). A check passes iff :math:`e_{rel} \le` :data:`TOL`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from .robots.base_parameters import IDENTIFIABILITY_RTOL, identifiability
 
 
 __all__ = [
     "TOL",
     "RANK_RTOL",
     "MINIMALITY_STATES",
+    "ENERGY_TOL",
+    "FD_STEP",
+    "FD_TOL",
+    "IDENTIFIABILITY_RTOL",
     "Check",
     "VerifyReport",
     "sample_states",
@@ -39,15 +55,17 @@ __all__ = [
     "mass_matrix_derivative",
     "pinocchio_references",
     "check_minimality",
+    "model_from_regressor",
+    "mass_matrix_derivative_fd",
+    "check_energy",
+    "identifiability",
     "verify_model",
 ]
 
-#: Pass threshold on the relative error of every check. Each entry of M, S, g, Y
-#: is a sum of O(10..100) float64 products of magnitudes up to O(100..1000)
-#: (theta up to ~10^2, qd qd up to 25), so its rounding error is about
-#: 100 * 2.2e-16 * 1e3 ~ 2e-11 absolute, i.e. <= 1e-11 relative to the scale of
-#: e_rel; Pinocchio's recursive algorithms have errors of the same order.
-#: 1e-9 leaves a margin of ~100 and is still 10^6 times below any modelling
+#: Pass threshold on the relative error of every check. Each entry of M, S, g, Y is a sum of
+#: O(10..100) float64 products of magnitudes up to O(100..1000) (theta up to ~10^2, qd qd up to
+#: 25): rounding ~100 * 2.2e-16 * 1e3 ~ 2e-11 absolute, <= 1e-11 relative; Pinocchio's recursive
+#: algorithms err as much. 1e-9 leaves a margin of ~100 and is 10^6 times below any modelling
 #: error (a wrong sign or a missing l2 factor gives e_rel ~ 1e-2 .. 1).
 TOL = 1e-9
 
@@ -63,7 +81,17 @@ RANK_RTOL = 1e-9
 #: determine 15 coefficients, and (3 * 200) x 30 is ample and cheap to SVD.
 MINIMALITY_STATES = 200
 
+#: Pass threshold of ``energy_identity``: the integral identity holds to the integrator's
+#: error (DOP853 at rtol 1e-11, atol 1e-12 over 1 s: measured <= 1.7e-11 relative on the 3R, UR5,
+#: Panda, SO-100/101, double pendulum); a 1 % error in g or M gives >= 1e-3.
+ENERGY_TOL = 1e-8
 
+#: Step h [s] of the 5-point central difference ``dM/dt ~ (M(q - 2h qd) - 8 M(q - h qd) +
+#: 8 M(q + h qd) - M(q + 2h qd)) / (12 h)``: truncation O(h^4 |qd|^5), rounding O(1e-16 / h);
+#: measured 2.6e-9 at h = 1e-3, 1.2e-12 at 1e-4 (best), 5e-12 at 2e-5 (3R, UR5, Panda, 1000 states).
+FD_STEP = 1e-4
+#: Pass threshold of ``skew_symmetry_fd`` (as :data:`TOL`; ~800 x the measured error).
+FD_TOL = 1e-9
 
 @dataclass(frozen=True)
 class Check:
@@ -111,6 +139,12 @@ class VerifyReport:
         Number of random states and the RNG seed used.
     robot : str
         The robot's registry name.
+    notes : tuple of str
+        Checks not run and why (tautologies for a robot computed by Pinocchio).
+    theta_order : str
+        What the entries of theta are, in order (the robot's ``theta_order``).
+    identifiability : float
+        ``s_p / s_1`` of the stacked regressor Y (:func:`identifiability`).
     """
 
     urdf: str
@@ -121,6 +155,9 @@ class VerifyReport:
     samples: int = 0
     seed: int = 0
     robot: str = ""
+    notes: tuple = ()
+    theta_order: str = ""
+    identifiability: float = math.nan
 
 
 def compare(value, reference, tol: float = TOL) -> Check:
@@ -171,16 +208,12 @@ def _symmetrize_upper(M: np.ndarray) -> np.ndarray:
 
 
 def mass_matrix_derivative(model, data, q, qd) -> np.ndarray:
-    r"""Exact :math:`\dot M(q) = \sum_k \partial M/\partial q_k\,\dot q_k` (3, 3) from Pinocchio.
+    r"""Exact :math:`\dot M(q) = \sum_k \partial M/\partial q_k\,\dot q_k` (n, n) from Pinocchio.
 
     With ``tau(q, 0, a) = M(q) a + g(q)``, column *j* of :math:`\dot M` is
-    ``(dtau_dq(q, 0, e_j) - dtau_dq(q, 0, 0)) @ qd`` where ``dtau_dq`` is the first
-    output of ``pinocchio.computeRNEADerivatives``. This is an analytic
-    derivative, exact up to rounding (~1e-13). A finite difference of ``crba``
-    would carry a truncation error O(h^4) against a rounding error O(eps/h)
-    (best ~1e-11 relative, dependent on the scale of M), too close to the 1e-9
-    pass threshold to be a reliable reference; ``tests/test_model.py`` uses a
-    5-point central difference only to cross-check this function.
+    ``(dtau_dq(q, 0, e_j) - dtau_dq(q, 0, 0)) @ qd``, ``dtau_dq`` the first output of
+    ``pinocchio.computeRNEADerivatives``: analytic, exact up to rounding (~1e-13). The robot's
+    own M differentiated numerically is :func:`mass_matrix_derivative_fd`.
     """
     import pinocchio as pin
 
@@ -304,6 +337,83 @@ def check_minimality(model, Y_stacked: np.ndarray, states: dict[str, np.ndarray]
     return Check(max(a1, a2), rel, tol, passed, detail)
 
 
+def _y_theta(robot, th, Q, QD, V, A, chunk: int = 2048) -> np.ndarray:
+    """``robot.regressor(q, qd, v, a) @ th`` at (N, n) states, in chunks (bounded memory)."""
+    out = np.empty(Q.shape)
+    for k in range(0, Q.shape[0], chunk):
+        sl = slice(k, k + chunk)
+        out[sl] = robot.regressor(Q[sl], QD[sl], V[sl], A[sl]) @ th
+    return out
+
+
+def model_from_regressor(robot, theta, Q, QD) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""M (N,n,n), C (N,n,n), g (N,n) rebuilt from the Slotine--Li regressor alone.
+
+    With :math:`Y(q, \dot q, v, a)\theta = M a + C(q, \dot q) v + g`:
+    ``g = Y(q, 0, 0, 0) theta``, column j of M is ``Y(q, 0, 0, e_j) theta - g`` and column j
+    of C is ``Y(q, qd, e_j, 0) theta - g``.
+    """
+    th = np.asarray(theta, dtype=float)
+    N, n = Q.shape
+    zero = np.zeros_like(Q)
+    g = _y_theta(robot, th, Q, zero, zero, zero)
+    M, C = np.empty((N, n, n)), np.empty((N, n, n))
+    for j in range(n):
+        e = np.zeros_like(Q)
+        e[:, j] = 1.0
+        M[:, :, j] = _y_theta(robot, th, Q, zero, zero, e) - g
+        C[:, :, j] = _y_theta(robot, th, Q, QD, e, zero) - g
+    return M, C, g
+
+
+def mass_matrix_derivative_fd(robot, Q, QD, h: float = FD_STEP) -> np.ndarray:
+    """dM/dt (N,n,n) along qd by the 5-point central difference of ``robot.mass_matrix`` (:data:`FD_STEP`)."""
+    Mf = [robot.mass_matrix(Q + k * h * QD) for k in (-2, -1, 1, 2)]
+    return (Mf[0] - 8.0 * Mf[1] + 8.0 * Mf[2] - Mf[3]) / (12.0 * h)
+
+
+def check_energy(robot, seed: int = 0, duration: float = 1.0, points: int = 51) -> Check:
+    r"""Energy identity :math:`\tfrac{d}{dt}\tfrac12 \dot q^T M \dot q = \dot q^T (\tau - g)` along a motion.
+
+    The motion is ``robot.forward_dynamics`` (the plant) from a seeded state (q uniform in
+    [-pi, pi], qd in [-1, 1]) under seeded torques ``tau_i = A_i sin(w_i t + phi_i)``
+    (``A_i = 2 M_ii(q0) + |g_i(q0)|``, w in [1, 5] rad/s), integrated by DOP853 (rtol 1e-11,
+    atol 1e-12) together with the work ``W(t) = int qd^T (tau - g(q)) dt``. Checks
+    ``E(t) - E(0) == W(t)`` at ``points`` times, with ``E = qd^T M(q) qd / 2`` from the robot's
+    ``mass_matrix``, ``g`` from its ``gravity`` (tolerance :data:`ENERGY_TOL`). C does no work
+    and does not enter: a wrong M, g or plant fails it.
+    """
+    from scipy.integrate import solve_ivp
+
+    n = robot.n
+    rng = np.random.default_rng([seed, 2])  # a stream of its own: the random states are unchanged
+    q0, qd0 = rng.uniform(-math.pi, math.pi, n), rng.uniform(-1.0, 1.0, n)
+    amp = 2.0 * np.diag(robot.mass_matrix(q0)) + np.abs(robot.gravity(q0))
+    w, phi = rng.uniform(1.0, 5.0, n), rng.uniform(0.0, 2 * math.pi, n)
+
+    def rhs(t, y):
+        q, qd = y[:n], y[n:2 * n]
+        u = amp * np.sin(w * t + phi)
+        return np.concatenate([qd, robot.forward_dynamics(q, qd, u), [qd @ (u - robot.gravity(q))]])
+
+    with np.errstate(all="ignore"):
+        sol = solve_ivp(rhs, (0.0, duration), np.concatenate([q0, qd0, [0.0]]), method="DOP853",
+                        rtol=1e-11, atol=1e-12, t_eval=np.linspace(0.0, duration, points))
+    if sol.status != 0 or sol.y.shape[1] != points:
+        return Check(math.nan, math.nan, ENERGY_TOL, False, f"the motion could not be integrated: {sol.message}")
+    Q, QD, W = sol.y[:n].T, sol.y[n:2 * n].T, sol.y[2 * n]
+    E = 0.5 * np.einsum("ni,nij,nj->n", QD, robot.mass_matrix(Q), QD)
+    return replace(compare(E - E[0], W, ENERGY_TOL), detail=f"{duration:g} s of forward_dynamics under seeded "
+                   f"sine torques, {points} points: max|W| = {np.abs(W).max():.3g} J, max kinetic energy {E.max():.3g} J")
+
+
+#: The tautological checks a robot computed by Pinocchio skips, and why (in the report's notes).
+TAUTOLOGY_NOTE = ("M_vs_crba, S_vs_coriolis_matrix and g_vs_gravity are not run: this robot's M, C and g are "
+                  "Pinocchio's crba, computeCoriolisMatrix and computeGeneralizedGravity on the same model, so "
+                  "they would compare Pinocchio with itself (error exactly 0, a check that cannot fail); "
+                  "M, C and g rebuilt from the compiled regressor Y theta replace them (*_from_regressor_*)")
+
+
 def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
     r"""Compare a robot's model and regressor with Pinocchio at random states.
 
@@ -322,22 +432,28 @@ def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
     VerifyReport
         Checks, each over all samples (shapes per state in parentheses):
 
-        ==========================  ==========================================================
-        ``M_vs_crba``               M(q) (n,n) == crba (symmetrized)
-        ``S_vs_coriolis_matrix``    C(q, qd) (n,n) == computeCoriolisMatrix
-        ``Sqd_vs_rnea``             C qd (n,) == rnea(q, qd, 0) - g
-        ``g_vs_gravity``            g(q) (n,) == computeGeneralizedGravity
-        ``Y_theta_vs_rnea``         Y(q, qd, qd, qdd) theta (n,) == rnea(q, qd, qdd)
-        ``Ysl_theta_vs_pinocchio``  Y(q, qd, v, a) theta (n,) == M a + C v + g (Pinocchio)
-        ``skew_symmetry``           C + C^T (n,n) == dM/dt (:func:`mass_matrix_derivative`)
-        ``theta_least_squares``     lstsq of stacked Y (nN,p) against stacked rnea == theta (p,)
-        ``minimality``              :func:`check_minimality` on the first
-                                    :data:`MINIMALITY_STATES` states
-        ==========================  ==========================================================
+        ===================================  ==========================================================
+        ``M_vs_crba``                        M(q) (n,n) == crba (symmetrized)
+        ``S_vs_coriolis_matrix``             C(q, qd) (n,n) == computeCoriolisMatrix
+        ``g_vs_gravity``                     g(q) (n,) == computeGeneralizedGravity
+        ``M_from_regressor_vs_crba``         instead of the three above when the robot's M, C, g are
+        ``C_from_regressor_vs_coriolis``     Pinocchio's own (``model_terms_are_pinocchio``): M, C, g of
+        ``g_from_regressor_vs_gravity``      :func:`model_from_regressor` against the same references
+        ``Sqd_vs_rnea``                      C qd (n,) == rnea(q, qd, 0) - g
+        ``Y_theta_vs_rnea``                  Y(q, qd, qd, qdd) theta (n,) == rnea(q, qd, qdd)
+        ``Ysl_theta_vs_pinocchio``           Y(q, qd, v, a) theta (n,) == M a + C v + g (Pinocchio)
+        ``skew_symmetry``                    C + C^T (n,n) == dM/dt (:func:`mass_matrix_derivative`)
+        ``skew_symmetry_fd``                 C + C^T == dM/dt by :func:`mass_matrix_derivative_fd` of
+                                             the robot's own M (dM/dt - 2C skew), tol :data:`FD_TOL`
+        ``energy_identity``                  :func:`check_energy`, tol :data:`ENERGY_TOL`
+        ``theta_least_squares``              lstsq of stacked Y (nN,p) against stacked rnea == theta (p,)
+        ``minimality``                       :func:`check_minimality` on the first
+                                             :data:`MINIMALITY_STATES` states
+        ===================================  ==========================================================
 
         The two identification checks use the same states as the others if
         ``samples >= MINIMALITY_STATES``, else :data:`MINIMALITY_STATES` states
-        drawn with the same seed.
+        drawn with the same seed; :func:`identifiability` of the same stack adds a warning.
     """
     th = np.asarray(robot.theta, dtype=float)
     nj, p = robot.n, robot.p
@@ -346,7 +462,6 @@ def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
     Q, QD, QDD, V, A = (st[k] for k in ("q", "qd", "qdd", "v", "a"))
     ref = pinocchio_references(model, st)
 
-    M = robot.mass_matrix(Q)
     S = robot.coriolis_matrix(Q, QD)
     Y = robot.regressor(Q, QD, QD, QDD)
     Ysl = robot.regressor(Q, QD, V, A)
@@ -359,24 +474,39 @@ def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
         tau_id = _rnea(model, st_id)
     theta_hat = np.linalg.lstsq(Y_id, tau_id.reshape(-1), rcond=None)[0]
 
-    checks = {
-        "M_vs_crba": compare(M, ref["M"]),
-        "S_vs_coriolis_matrix": compare(S, ref["C"]),
+    notes = []
+    if getattr(robot, "model_terms_are_pinocchio", False):
+        M_y, C_y, g_y = model_from_regressor(robot, th, Q, QD)
+        checks = {"M_from_regressor_vs_crba": compare(M_y, ref["M"]),
+                  "C_from_regressor_vs_coriolis": compare(C_y, ref["C"]),
+                  "g_from_regressor_vs_gravity": compare(g_y, ref["g"])}
+        notes.append(TAUTOLOGY_NOTE)
+    else:
+        checks = {"M_vs_crba": compare(robot.mass_matrix(Q), ref["M"]),
+                  "S_vs_coriolis_matrix": compare(S, ref["C"]),
+                  "g_vs_gravity": compare(robot.gravity(Q), ref["g"])}
+    sym = S + np.swapaxes(S, 1, 2)
+    checks.update({
         "Sqd_vs_rnea": compare(np.einsum("nij,nj->ni", S, QD), ref["c"]),
-        "g_vs_gravity": compare(robot.gravity(Q), ref["g"]),
         "Y_theta_vs_rnea": compare(Y @ th, ref["tau"]),
         "Ysl_theta_vs_pinocchio": compare(Ysl @ th, ref["tau_sl"]),
-        "skew_symmetry": compare(S + np.swapaxes(S, 1, 2), ref["Mdot"]),
+        "skew_symmetry": compare(sym, ref["Mdot"]),
+        "skew_symmetry_fd": compare(sym, mass_matrix_derivative_fd(robot, Q, QD), FD_TOL),
+        "energy_identity": check_energy(robot, seed),
         "theta_least_squares": compare(theta_hat, th),
         "minimality": check_minimality(model, Y_id[: nj * MINIMALITY_STATES], st_id),
-    }
+    })
+    ratio, weak = identifiability(Y_id[: nj * MINIMALITY_STATES], tuple(robot.coefficient_names))
     return VerifyReport(
         urdf=str(getattr(robot, "urdf", None) or robot.label),
         theta=tuple(float(x) for x in th),
         checks=checks,
-        warnings=tuple(robot.physical_issues()),
+        warnings=tuple(robot.physical_issues()) + tuple(weak),
         passed=all(c.passed for c in checks.values()),
         samples=samples,
         seed=seed,
         robot=robot.name,
+        notes=tuple(notes),
+        theta_order=getattr(robot, "theta_order", "the robot's coefficient order (coefficient_names)"),
+        identifiability=ratio,
     )

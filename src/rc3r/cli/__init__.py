@@ -130,14 +130,17 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="simulate one controller on one plant")
     r.add_argument("--controller", choices=tuple(LAWS), help="control law (default: config file, else robust)")
     r.add_argument("--perturbed", action="store_true",
-                   help="plant = Table 1 robot, controller uses theta_0 and rho (default: ideal)")
+                   help="the controller's model is theta_0 and rho of the box, not the plant's theta (the "
+                        "plant stays the one --plant names, default nominal = Table 1); default: ideal, the "
+                        "controller knows the plant's theta; implied by --payload")
     r.add_argument("--plant", help="plant: nominal (Table 1), upper, lower, paper-upper, "
                                   "corner:<30 bits>, random:<seed> (of the box), or a URDF path")
     r.add_argument("--box", help="box TOML: the plant's box and the controller's bounds (default: the paper's box)")
     r.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default: config, else rr3)")
     r.add_argument("--payload", type=_interval, metavar="LO:HI",
-                   help="unknown payload mass on the last link [kg]: the plant carries HI (see --plant), the "
-                        "controller gets exact bounds")
+                   help="unknown payload mass on the last link [kg]: the plant carries HI (see --plant); the "
+                        "controller does not know it: theta_0 and rho are the exact bounds of LO..HI (the run "
+                        "is perturbed; [model] theta = \"plant\" in --config gives it the loaded plant's theta)")
     r.add_argument("--payload-com", type=_vector3, metavar="X,Y,Z",
                    help="payload CoM in the last joint's frame [m] (default 0,0,0)")
     r.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")

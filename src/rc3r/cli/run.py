@@ -34,6 +34,29 @@ def _fmt3(x) -> str:
     return " ".join(f"{v:.3g}" for v in x)
 
 
+def describe_model(spec) -> str:
+    """What the plant is and what the controller knows of it, for the run's announcement.
+
+    The plant is the true robot (``spec.plant.label``, "the nominal robot" when it is that one);
+    the controller's model is theta_0 and rho with the short form of their sources
+    (``spec.model``), or the plant's own theta in an ideal run. A perturbed run's perturbation is
+    in the controller's model, not in the plant.
+    """
+    model = spec.model
+    plant = f"plant '{spec.plant.label}'"
+    if spec.plant.label == model.get("nominal"):
+        plant += " (the nominal robot)"
+    if spec.scenario != "perturbed" and (model.get("theta_source") or "").startswith("theta of the plant"):
+        return f"{plant}; controller model = the plant's theta (ideal)"
+    short = lambda src: (src or "").split(":")[0]  # noqa: E731 - the source up to its formula
+    out = f"{plant}; controller model ({spec.scenario}): {short(model.get('theta_source'))}"
+    if model.get("rho") is not None:
+        out += f", rho = {model['rho']:.6g} ({short(model.get('rho_source'))})"
+    if model.get("rho_i") is not None:
+        out += ", rho_i certified"
+    return out
+
+
 def cmd_run(args) -> int:
     """``rc3r run``: one simulation; writes timeseries.csv, run.png, metrics.json into --out.
 
@@ -54,7 +77,9 @@ def cmd_run(args) -> int:
 
         check_animatable(spec.plant, fmt)  # before anything is announced or simulated
     announce_compile(spec.plant)
-    _progress(f"rc3r run: {spec.name} on plant '{spec.plant.label}', {spec.options.mode}"
+    for warning in spec.warnings:
+        _progress(f"rc3r: warning: {warning}")
+    _progress(f"rc3r run: {spec.name}: {describe_model(spec)}; {spec.options.mode}"
               f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
               f"{spec.options.duration:g} s, engine {spec.options.engine}"
               f"{f', then animation.{fmt} ({frame_count(spec.options.duration)} frames)' if fmt else ''} ...")
@@ -139,29 +164,45 @@ def cmd_paper(args) -> int:
         return _paper(paper, tmp)
 
 
-def _theory_figures(res: dict, out: Path, mode: str, label: str) -> None:
-    """FBL against robust per joint (ideal, perturbed) and ||Y^T r|| against eps."""
+#: Caption of the per-joint FBL-against-robust figure, per case: each speaks of its own case only.
+COMPARISON_CAPTIONS = {
+    "ideal": "Same plant, same trajectory, one axis per joint. Ideal: both laws know the plant's theta, so "
+             "FBL's error is the integrator's and the robust term has no model error to remove.",
+    "perturbed": "Same plant, same trajectory, one axis per joint. Perturbed: the laws know only theta_0 and "
+                 "rho; FBL is left with the model error, the robust term removes it down to the boundary "
+                 "layer (a smaller eps: smaller error).",
+}
+
+
+def theory_figures(res: dict, label: str) -> dict:
+    """The figures of :func:`_theory_figures` by file stem (``compare-ideal``, ``compare-perturbed``,
+    ``boundary-layer``), as :class:`matplotlib.figure.Figure` objects; ``res`` maps scenario names
+    (``fbl-ideal``, ``robust-perturbed``, ...) to results, missing ones are left out."""
     from ..plotting import boundary_layer_figure, comparison_figure
 
+    figs = {}
     for case in ("ideal", "perturbed"):
-        runs = {f"FBL {case}": res.get(f"fbl-{case}"), f"robust {case} eps 0.5": res.get(f"robust-{case}")}
+        runs = {f"FBL {case}": res.get(f"fbl-{case}"), f"robust {case}, eps 0.5": res.get(f"robust-{case}")}
         if case == "perturbed":
-            runs["robust perturbed eps 0.05"] = res.get("robust-perturbed-eps0.05")
+            runs["robust perturbed, eps 0.05"] = res.get("robust-perturbed-eps0.05")
         runs = {k: v for k, v in runs.items() if v is not None}
         if runs:
-            atomic_savefig(comparison_figure(
-                runs, f"FBL vs robust, {case} plant, {label}",
-                "Same plant, same trajectory, one axis per joint. Ideal: FBL's error is the integrator's; "
-                "perturbed: FBL is left with the model error, the robust term removes it down to the boundary "
-                "layer (a smaller eps: smaller error)."), out / f"compare-{case}-{mode}.png", dpi=110)
+            figs[f"compare-{case}"] = comparison_figure(runs, f"FBL vs robust, {case} case, {label}",
+                                                        COMPARISON_CAPTIONS[case])
     robust = {f"eps {r.controller.get('eps'):g}": r for n, r in res.items()
               if n.startswith("robust-perturbed") and isinstance(r.controller.get("eps"), (int, float))}
     if robust:
-        atomic_savefig(boundary_layer_figure(
-            robust, f"robust law, perturbed plant: ||Y^T r|| and the boundary layer, {label}",
+        figs["boundary-layer"] = boundary_layer_figure(
+            robust, f"robust law, perturbed case: ||Y^T r|| and the boundary layer, {label}",
             "Below its dashed line a run is inside its boundary layer, where the robust term is the linear "
-            "gain (rho/eps) Y Y^T r; the ultimate error bound scales with rho eps."),
-            out / f"boundary-layer-{mode}.png", dpi=110)
+            "gain (rho/eps) Y Y^T r; the ultimate error bound scales with rho eps.")
+    return figs
+
+
+def _theory_figures(res: dict, out: Path, mode: str, label: str) -> None:
+    """FBL against robust per joint (ideal, perturbed) and ||Y^T r|| against eps, saved as PNG."""
+    for stem, fig in theory_figures(res, label).items():
+        atomic_savefig(fig, out / f"{stem}-{mode}.png", dpi=110)
 
 
 def _paper(paper, out: Path) -> int:

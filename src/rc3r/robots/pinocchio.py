@@ -164,6 +164,14 @@ class PinocchioRobot(Robot):
 
     name = "pinocchio"
 
+    #: M, C and g are Pinocchio's own crba, computeCoriolisMatrix, computeGeneralizedGravity on
+    #: :attr:`model`: ``verify-model`` does not compare them with themselves (:mod:`rc3r.verify`).
+    model_terms_are_pinocchio = True
+
+    #: What theta's entries are (``verify-model`` prints it): see :attr:`coefficient_names`.
+    theta_order = ("base parameters, in the order of rc3r.robots.base_parameters: the kept standard-parameter "
+                   "columns, increasing; names in coefficient_names")
+
     def __init__(self, model, robot_name: str | None = None, label: str | None = None,
                  urdf: str | None = None, base: BaseParameters | None = None, seed: int = 0, kernel=None):
         import pinocchio as pin
@@ -255,23 +263,43 @@ class PinocchioRobot(Robot):
         """None: a URDF arm has no default uncertainty (give ``--box`` or ``--payload``)."""
         return None
 
+    def _sine_centres(self, amplitude: float):
+        """Centre c (n,) and amplitude A (n,) of each joint's default sine, and the degenerate joints."""
+        lo, hi = self.joint_limits
+        degenerate = ~(hi - lo > 0)  # lower >= upper (or NaN): no range to stay inside
+        with np.errstate(invalid="ignore"):
+            mid = np.where(degenerate, np.where(np.isfinite(lo), lo, 0.0), 0.5 * (lo + hi))
+        c = np.clip(np.nan_to_num(mid, nan=0.0), -math.pi, math.pi)
+        amp = np.where(degenerate, amplitude, np.minimum(amplitude, 0.3 * 0.5 * (hi - lo)))
+        return c, amp, np.flatnonzero(degenerate)
+
     def default_trajectory(self, amplitude: float = 0.5, omega: float = 1.0):
         r"""Sines inside the joint limits: :math:`q_{d,i} = c_i + A_i \sin(\omega t + i\pi/3)`.
 
         ``c_i`` is the middle of joint i's range (clipped to [-pi, pi]), ``A_i = min(amplitude,
         0.3 x half the range)`` [rad], ``omega`` [rad/s]; so the reference stays inside the limits
-        with a margin of at least 70 % of the half range.
+        with a margin of at least 70 % of the half range. A joint whose limits are no range
+        (``lower >= upper``, e.g. the double pendulum of example-robot-data: both 0) gets
+        ``c_i = lower`` (clipped) and the fixed amplitude ``A_i = amplitude``, instead of a
+        constant q_d; :meth:`default_trajectory_warnings` says so.
         """
-        import math
-
         from ..trajectory import Sines
 
-        lo, hi = self.joint_limits
-        c = np.clip(0.5 * (lo + hi), -math.pi, math.pi)
-        half = 0.5 * (hi - lo)
-        amp = np.minimum(amplitude, 0.3 * half)
+        c, amp, _ = self._sine_centres(amplitude)
         terms = tuple((i + 1, float(amp[i]), float(omega), i * math.pi / 3) for i in range(self.n))
         return Sines(tuple(float(x) for x in c), terms)
+
+    def default_trajectory_warnings(self, amplitude: float = 0.5) -> list[str]:
+        """Why :meth:`default_trajectory` did not follow the joint limits: one line, or none."""
+        c, amp, bad = self._sine_centres(amplitude)
+        if not bad.size:
+            return []
+        lo, hi = self.joint_limits
+        joints = ", ".join(f"{self.joint_names[i]} ({lo[i]:g}..{hi[i]:g})" for i in bad)
+        return [f"joint limits lower >= upper are no range for {joints}: the default trajectory moves "
+                f"{'that joint' if bad.size == 1 else 'those joints'} by the fixed amplitude {amplitude:g} "
+                f"about c = {', '.join(f'{c[i]:g}' for i in bad)} (q_d,i = c + {amplitude:g} sin(t + i pi/3)); "
+                "the plant does not enforce the limits"]
 
     #: theta is linear in the standard parameters (first moments, inertia about the joint frame),
     #: so exact ranges over a box follow from interval arithmetic (:mod:`rc3r.uncertainty.bounds`).

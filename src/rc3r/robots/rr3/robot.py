@@ -44,6 +44,8 @@ class RR3(Robot):
     """
 
     name = "rr3"
+    #: What theta's entries are (``verify-model`` prints it).
+    theta_order = "paper order, section 3.1.1"
     fast_engine = FastEngine
 
     def __init__(self, params: ArmParams, label: str = "nominal", model=None, urdf: str | None = None):
