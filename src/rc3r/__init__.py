@@ -32,6 +32,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.pinocchio_bench``        ``rc3r bench``'s generic-robot section (UR5, Panda)
 ``rc3r.controllers``                   control laws u = Y theta_eff + w and their registry
 ``rc3r.controllers._kernels``          compiled kernels of the built-in laws (generic over n, p)
+``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
 ``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
 ``rc3r.trajectory``                    desired trajectories (sines, quintic), compiled evaluation
 ``rc3r.uncertainty``                   parameter uncertainty (re-exports the three below)
@@ -51,6 +52,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate._fast``                the ``fast`` engine (a robot's compiled simulator)
 ``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)
 ``rc3r.simulate.metrics``              scalar metrics of a run
+``rc3r.simulate.verdict``              what a run means: clean, chattering, saturated, limit-violated, diverged
 ``rc3r.simulate.status``               status codes and the compiled bound check
 ``rc3r.simulate.export``               a result as a table, CSV, figure, run directory
 ``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
@@ -85,6 +87,8 @@ from . import _numba_cache
 _numba_cache.install()  # before any compiled kernel is defined: caches keyed on the package's content
 
 from .controllers import LAWS, Law, make_law, register_law
+from .controllers.controller import Controller
+from .plants import LoopEffects, Plant
 from .errors import ConfigError, DivergenceError, ParameterError, Rc3rError, UrdfError
 from .robots import ROBOTS, Robot, load_robot
 from .simulate import SimOptions, SimResult, simulate
@@ -93,7 +97,8 @@ from .study import RunSpec, build_run, execute
 __all__ = [
     "__version__",
     "Robot", "ROBOTS", "load_robot",
-    "Law", "LAWS", "make_law", "register_law",
+    "Law", "LAWS", "make_law", "register_law", "Controller",
+    "Plant", "LoopEffects",
     "SimOptions", "SimResult", "simulate",
     "RunSpec", "build_run", "execute",
     "Rc3rError", "ConfigError", "ParameterError", "UrdfError", "DivergenceError",

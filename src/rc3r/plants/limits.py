@@ -34,7 +34,7 @@ class JointLimits(Effect):
 
     def __post_init__(self):
         lo, hi, vel = (np.atleast_1d(np.asarray(x, dtype=float)) for x in (self.lower, self.upper, self.velocity))
-        if not (lo.shape == hi.shape == vel.shape and lo.ndim == 1) or np.any(np.isnan(lo + hi + vel)) \
+        if not (lo.shape == hi.shape == vel.shape and lo.ndim == 1) or np.any(np.isnan(lo) | np.isnan(hi) | np.isnan(vel)) \
                 or np.any(lo > hi) or np.any(vel <= 0):
             raise ConfigError(f"joint limits need lower <= upper and velocity > 0 per joint, got "
                               f"{lo.tolist()}, {hi.tolist()}, {vel.tolist()}")

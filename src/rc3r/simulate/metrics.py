@@ -12,6 +12,10 @@ Definitions (per joint j, over the stored run of length T):
   runs over every controller sample (exact for a zero-order-hold signal); in
   continuous mode over the stored grid (``output_rate``, default 1 kHz). A smooth
   torque of amplitude A at 1 rad/s scores about 0.64 A; chattering adds to it.
+* ``verdict``, ``tolerance``, ``tolerance_met``, ``saturation_fraction``,
+  ``chattering_joints``, ``limits`` -- :mod:`rc3r.simulate.verdict` (what the run means:
+  clean, chattering, saturated, limit-violated, diverged, interrupted), from the plant's
+  effects recorded in ``effects`` (and the loop's in ``loop``).
 * ``boundary_layer`` -- robust law (eq. 6) only: ``median`` and ``max`` of
   :math:`\|Y^T r\| / \epsilon` over the stored rows after t = 0, and ``outside`` = the
   fraction of them with :math:`\|Y^T r\| > \epsilon` (outside the layer the robust term
@@ -37,8 +41,30 @@ def _layer(res, eps):
     return {"median": float(np.median(x)), "max": float(x.max()), "outside": float(np.mean(x > 1.0))}
 
 
-def run_metrics(res, seed=None) -> dict:
-    """The metrics of ``res`` as a JSON-ready dict (definitions in the module docstring)."""
+def _verdict(res, tolerance) -> dict:
+    from .verdict import TOLERANCE, verdict
+
+    effects = {e.get("effect"): e for e in res.robot.get("effects", [])}
+    limits = None
+    if "limits" in effects:
+        from ..plants.limits import JointLimits, crossings
+
+        d = effects["limits"]
+        inf = np.inf
+
+        def arr(x, fill):
+            return np.array([fill if v is None else v for v in x], dtype=float)
+
+        jl = JointLimits(arr(d["lower"], -inf), arr(d["upper"], inf), arr(d["velocity"], inf))
+        limits = crossings(jl, res.t, res.q, res.qd)
+    sat = effects.get("saturation", {}).get("limit")
+    return verdict(res, saturation=sat, limits=limits, tolerance=TOLERANCE if tolerance is None else tolerance)
+
+
+def run_metrics(res, seed=None, tolerance=None) -> dict:
+    """The metrics of ``res`` as a JSON-ready dict (definitions in the module docstring);
+    ``tolerance`` [rad] of the verdict's ``tolerance_met`` (default
+    :data:`rc3r.simulate.verdict.TOLERANCE`)."""
     e = res.e
     nan = [float("nan")] * res.q.shape[1]
     T = max(res.t_end, 1e-12)
@@ -48,7 +74,7 @@ def run_metrics(res, seed=None) -> dict:
     else:
         tv = np.abs(np.diff(res.u, axis=0)).sum(axis=0) / T if res.u.shape[0] > 1 else np.zeros(res.u.shape[1])
     c = res.controller
-    return {
+    out = {
         "controller": c.get("name"),
         "robot": res.robot.get("robot"),
         "plant": res.plant,
@@ -75,4 +101,8 @@ def run_metrics(res, seed=None) -> dict:
         "steps": res.steps,
         "tolerances": {"rtol": res.options.rtol, "atol": res.options.atol} if res.mode == "continuous" else None,
         "seed": seed,
+        "effects": res.robot.get("effects", []),
+        "loop": res.loop,
     }
+    out.update(_verdict(res, tolerance))
+    return out

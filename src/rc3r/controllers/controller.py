@@ -1,0 +1,122 @@
+r"""A controller for loops rc3r does not run: ``u = ctrl.step(t, q, qd)``.
+
+:class:`Controller` holds what a law needs between calls -- the reference trajectory, the
+law's state (the adaptive estimate :math:`\hat\theta`), the zero-order hold of a digital
+controller at ``rate`` Hz, and the delay line -- so that another simulator (MuJoCo, a
+user's own integrator) or a real-time loop can call it with measured states only. It does
+what rc3r's sampled simulator does, sample for sample: at the first call at or after
+:math:`t_k = k T` it updates the law's state by forward Euler
+(:math:`z_k = z_{k-1} + T \dot z_{k-1}`), computes :math:`u_k` from that call's
+:math:`(q, \dot q)`, pushes it into the delay line and from then on returns the delayed
+command :math:`u_{k-d}` (:math:`u_0` while :math:`k < d`) until :math:`t_{k+1}`. Without a
+rate every call computes a fresh torque and integrates the state by forward Euler between
+calls (a continuous controller as seen by a fine-stepping caller).
+
+``examples/external_loop.py`` drives a plant rc3r does not simulate and reproduces
+``rc3r run`` of the same specification.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ParameterError
+
+__all__ = ["Controller"]
+
+
+class Controller:
+    """A law, the model it evaluates its regressor on, a trajectory, a rate and a delay.
+
+    Parameters
+    ----------
+    law : rc3r.controllers.Law
+    model : rc3r.robots.base.Robot
+        Whose regressor Y the law uses (kinematics and gravity; never the plant's parameters).
+    trajectory : rc3r.trajectory.Trajectory
+    rate : float, optional
+        Controller rate [Hz]; None: continuous (a torque at every call).
+    delay : int
+        Samples between a measurement and its torque (sampled only).
+
+    Examples
+    --------
+    >>> import rc3r
+    >>> spec = rc3r.build_run(controller="fbl", perturbed=True, rate=1000.0, duration=1.0)
+    >>> ctrl = rc3r.Controller.from_run(spec)
+    >>> q, qd, _ = spec.trajectory.evaluate(0.0)
+    >>> ctrl.step(0.0, q, qd).shape
+    (3,)
+    """
+
+    def __init__(self, law, model, trajectory, rate: float | None = None, delay: int = 0):
+        if trajectory.n != model.n or law.p != model.p:
+            raise ParameterError(f"controller parts do not fit: model n = {model.n}, p = {model.p}; "
+                                 f"trajectory n = {trajectory.n}; law p = {law.p}")
+        if rate is not None and not (np.isfinite(rate) and rate > 0):
+            raise ParameterError(f"controller rate must be finite and > 0 Hz, got {rate}")
+        if isinstance(delay, bool) or not isinstance(delay, (int, np.integer)) or delay < 0:
+            raise ParameterError(f"delay must be a whole number of samples >= 0, got {delay!r}")
+        if delay and rate is None:
+            raise ParameterError("a delay needs a sampled controller (a rate)")
+        self.law, self.model, self.trajectory = law, model, trajectory
+        self.rate, self.delay = rate, int(delay)
+        self.reset()
+
+    @classmethod
+    def from_run(cls, spec) -> "Controller":
+        """The controller of a run specification (:func:`rc3r.build_run`): its law, model, trajectory,
+        rate and loop delay."""
+        loop = getattr(spec, "loop", None)
+        model = getattr(spec, "robot_model", None) or spec.plant
+        model = getattr(model, "rigid", model)
+        return cls(spec.law, model, spec.trajectory, spec.options.rate, loop.delay if loop is not None else 0)
+
+    def reset(self) -> None:
+        """Back to t = 0: the law's initial state, an empty hold and delay line."""
+        self.z = self.law.initial_state().copy()
+        self._zdot = np.zeros_like(self.z)
+        self._k = -1          # last sample computed
+        self._t_last = None   # continuous: time of the last call
+        self._line: list = []
+        self.u = None
+        self.diagnostic = 0.0
+
+    def _torque(self, t, q, qd):
+        qd_ref = np.empty((3, self.model.n))
+        pos, vel, acc = self.trajectory.evaluate(float(t))
+        qd_ref[0], qd_ref[1], qd_ref[2] = pos, vel, acc
+        u, zdot, diag = self.law.torque(self.model, q, qd, qd_ref, self.z)
+        return np.asarray(u, dtype=float), np.asarray(zdot, dtype=float), float(diag)
+
+    def step(self, t: float, q, qd) -> np.ndarray:
+        """The torque (n,) [N m] to apply from time ``t`` [s] on, given the measured ``q``, ``qd`` (n,).
+
+        Calls must come in non-decreasing ``t``; a sampled controller computes a new torque at most
+        once per period and holds it in between.
+        """
+        q = np.asarray(q, dtype=float)
+        qd = np.asarray(qd, dtype=float)
+        if q.shape != (self.model.n,) or qd.shape != (self.model.n,):
+            raise ParameterError(f"q and qd must be ({self.model.n},), got {q.shape}, {qd.shape}")
+        if self.rate is None:
+            if self._t_last is not None:
+                if t < self._t_last:
+                    raise ParameterError(f"controller called at t = {t} after t = {self._t_last}")
+                self.z = self.z + (t - self._t_last) * self._zdot
+            self.u, self._zdot, self.diagnostic = self._torque(t, q, qd)
+            self._t_last = t
+            return self.u
+        T = 1.0 / self.rate
+        k = int(np.floor(t / T + 1e-9))
+        if k < self._k:
+            raise ParameterError(f"controller called at t = {t} s, before its last sample {self._k * T} s")
+        if k > self._k:
+            if self._k >= 0:
+                self.z = self.z + T * self._zdot  # forward Euler over one period, as the simulator
+            ucmd, self._zdot, self.diagnostic = self._torque(k * T, q, qd)
+            self._line.append(ucmd)
+            if len(self._line) > self.delay + 1:
+                self._line.pop(0)
+            self.u = self._line[0]
+            self._k = k
+        return self.u
