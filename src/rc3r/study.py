@@ -61,6 +61,10 @@ class RunSpec:
     scenario: str
     model: dict = field(default_factory=dict)
     warnings: tuple = ()
+    true_plant: object = None
+    loop: object = None
+    robot_model: object = None
+    tolerance: float | None = None
 
 
 #: Keys a run configuration may hold, per table (docs/control.md).
@@ -68,7 +72,8 @@ CONFIG_KEYS = {
     "": ("robot", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains", "trajectory",
          "simulation"),
     "payload": ("mass", "com"),
-    "plant": ("spec", "urdf", "box"),
+    "plant": ("spec", "urdf", "box", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
+              "q0_error", "qd0_error", "noise_seed", "engine"),
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
     "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "engine", "jac_reuse",
@@ -199,7 +204,8 @@ class _Bounds:
 
 def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
     if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
-        plant = type(nominal).from_urdf(spec)
+        lock = getattr(nominal, "locked", None)
+        plant = type(nominal).from_urdf(spec, lock=lock) if lock else type(nominal).from_urdf(spec)
     elif bounds.payload is not None:
         plant = _payload_plant(nominal, bounds.payload, spec)
     elif spec == "nominal":
@@ -304,7 +310,9 @@ def _law(kind: str, model: dict, cfg: dict, eps_override, table: dict | None = N
 def build_run(*, robot: str | None = None, controller: str | None = None, perturbed: bool = False,
               plant: str | None = None, eps: float | None = None, rate: float | None = None,
               duration: float | None = None, engine: str | None = None, box: str | None = None,
-              payload=None, payload_com=None, config: dict | None = None, name: str | None = None) -> RunSpec:
+              payload=None, payload_com=None, config: dict | None = None, name: str | None = None,
+              urdf=None, lock: dict | None = None, friction=None, torque_limit=None, noise=None, delay=None,
+              plant_engine: str | None = None, tolerance: float | None = None, plant_rng=None) -> RunSpec:
     """Resolve a run from keyword options (command line) over a config dict (TOML).
 
     Keyword options win over the config; both over the defaults (the robot's
@@ -313,11 +321,15 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     ``urdf``, legacy ``box``), ``[model]`` (``theta``, ``rho``), ``[controller]``
     (``kind`` and gains), ``[trajectory]``, ``[simulation]`` (docs/control.md).
     A payload makes the run perturbed unless ``[model] theta = "plant"`` (module docstring).
+    ``urdf`` (and ``lock``, ``{joint: value}``) read the nominal robot from a URDF (any serial arm
+    through Pinocchio unless ``robot`` names a closed-form one). ``friction``, ``torque_limit``,
+    ``noise``, ``delay``, ``plant_engine`` and the ``[plant]`` table's effect keys build the true
+    plant and its loop (:func:`rc3r.plants.resolve`); ``tolerance`` [rad] is the verdict's.
     """
     cfg = config or {}
     _check_config(cfg, controller)
     seed = int(cfg.get("seed", 0))
-    nominal = load_robot(robot or cfg.get("robot", DEFAULT_ROBOT))
+    nominal = _nominal(robot or cfg.get("robot"), urdf, lock)
     ctrl_cfg = dict(cfg.get("controller", {}))
     kind = controller or ctrl_cfg.get("kind", "robust")
     if kind not in LAWS:
@@ -365,13 +377,41 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     except TypeError as exc:
         raise ConfigError(f"[simulation]: {exc}") from None
     scenario = "perturbed" if perturbed else "ideal"
-    return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings))
+    from .plants import resolve
+
+    true_plant, loop, _ = resolve(the_plant, plant_cfg, seed=seed, rng=plant_rng, friction=friction,
+                                  torque_limit=torque_limit, noise=noise, delay=delay, plant_engine=plant_engine)
+    if loop is not None and loop.active and opts.rate is None:
+        raise ConfigError("sensor noise, quantization and delay act on a sampled controller: give a rate (--rate HZ)")
+    return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings),
+                   true_plant, loop, nominal, tolerance)
+
+
+def _nominal(robot: str | None, urdf=None, lock: dict | None = None):
+    """The controller's model: the registered ``robot`` (default the paper's arm), or read from ``urdf``
+    (a closed-form robot's own reader when ``robot`` names one, else any serial arm through Pinocchio),
+    with the joints of ``lock`` fixed."""
+    from .robots import load_urdf_robot, robot_class
+
+    if urdf is None:
+        if not lock:
+            return load_robot(robot or DEFAULT_ROBOT)
+        from .robots.pinocchio import NAMED, PinocchioRobot
+
+        if (robot or DEFAULT_ROBOT) not in NAMED:
+            raise ConfigError(f"--lock needs an arm read through Pinocchio (--urdf PATH or one of {', '.join(NAMED)})")
+        return PinocchioRobot.named(robot, lock={**NAMED[robot][1], **lock})
+    cls = robot_class(robot) if robot else None
+    if cls is not None and cls.name == robot and not lock:  # a closed-form robot's own URDF reader
+        return cls.from_urdf(urdf)
+    return load_urdf_robot(urdf, lock=lock)
 
 
 def execute(spec: RunSpec) -> tuple[SimResult, dict]:
     """Simulate a resolved run; return the result and its metrics (with the model's provenance)."""
-    res = simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-    m = run_metrics(res, seed=spec.seed)
+    res = simulate(spec.true_plant if spec.true_plant is not None else spec.plant, spec.law, spec.trajectory,
+                   spec.options, loop=spec.loop, model=spec.robot_model)
+    m = run_metrics(res, seed=spec.seed, tolerance=spec.tolerance)
     m.update({"name": spec.name, "scenario": spec.scenario, "model": spec.model})
     if spec.warnings:
         m["warnings"] = list(spec.warnings)

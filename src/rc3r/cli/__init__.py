@@ -79,6 +79,73 @@ def _vector3(text):
     return v
 
 
+def _lock(text):
+    name, sep, value = text.partition("=")
+    try:
+        v = float(value)
+    except ValueError:
+        v = float("nan")
+    if not sep or not name or not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected JOINT=VALUE (a joint name and a finite number), got {text!r}")
+    return name, v
+
+
+def _urdf_or_number(text):
+    if text == "urdf":
+        return text
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'urdf' or a number, got {text!r}") from None
+    if not (math.isfinite(x) and x > 0):
+        raise argparse.ArgumentTypeError(f"must be finite and > 0, got {text}")
+    return x
+
+
+def _friction(text):
+    if text == "urdf":
+        return text
+    try:
+        fv, fc = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'urdf' or VISCOUS:COULOMB, got {text!r}") from None
+    if not (math.isfinite(fv) and math.isfinite(fc) and fv >= 0 and fc >= 0):
+        raise argparse.ArgumentTypeError(f"expected finite VISCOUS:COULOMB >= 0, got {text!r}")
+    return f"{fv!r}:{fc!r}"
+
+
+def _noise(text):
+    try:
+        sq, sqd = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected SIGMA_Q:SIGMA_QD, got {text!r}") from None
+    if not (math.isfinite(sq) and math.isfinite(sqd) and sq >= 0 and sqd >= 0):
+        raise argparse.ArgumentTypeError(f"expected finite SIGMA_Q:SIGMA_QD >= 0, got {text!r}")
+    return f"{sq!r}:{sqd!r}"
+
+
+def plant_args(p, robot_help: bool = True) -> None:
+    """The arm and plant options of run, montecarlo and sweep (docs/control.md, "Plants")."""
+    if robot_help:
+        p.add_argument("--urdf", help="the arm from a URDF (any serial arm through Pinocchio; with --robot rr3 the "
+                                      "3R's closed form)")
+        p.add_argument("--lock", type=_lock, action="append", metavar="JOINT=VALUE",
+                       help="fix a joint of the URDF at VALUE (repeatable; fingers, mimic joints)")
+    p.add_argument("--torque-limit", type=_urdf_or_number, metavar="urdf|NM",
+                   help="actuator saturation: the URDF's effort limits or one limit [N m] for every joint")
+    p.add_argument("--friction", type=_friction, metavar="urdf|VISCOUS:COULOMB",
+                   help="joint friction of the plant: the URDF's <dynamics damping friction> or values [N m s/rad]:[N m]")
+    p.add_argument("--noise", type=_noise, metavar="SIGMA_Q:SIGMA_QD",
+                   help="sensor noise std on q [rad] and qd [rad/s] (sampled runs; seeded by the run's seed)")
+    p.add_argument("--delay", type=_positive(int, allow_zero=True), metavar="SAMPLES",
+                   help="samples between a measurement and its torque (sampled runs)")
+    p.add_argument("--plant-engine", choices=("pinocchio", "mujoco"),
+                   help="rigid body of the plant: Pinocchio (default) or MuJoCo (extra 'mujoco'; the URDF's own "
+                        "parameters; for the 3R the consistent arm with Table 1's theta)")
+    p.add_argument("--tolerance", type=_positive(), help="tracking tolerance on max|e_j| [rad] of the verdict "
+                                                         "(default 0.01)")
+
+
 def _controllers(text):
     names = [c.strip() for c in text.split(",") if c.strip()]
     bad = [c for c in names if c not in LAWS]
@@ -124,7 +191,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("bounds", help="theta_0 and rho from an uncertainty box")
     b.add_argument("--box", help="box TOML (default: the paper's box)")
-    b.add_argument("--urdf", help="nominal robot URDF (default: urdf/rr3.urdf)")
+    b.add_argument("--urdf", help="nominal robot URDF (default: urdf/rr3.urdf; any serial arm through Pinocchio)")
+    b.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}) instead of --urdf")
+    b.add_argument("--lock", type=_lock, action="append", metavar="JOINT=VALUE",
+                   help="fix a joint of the URDF at VALUE (repeatable)")
+    b.add_argument("--payload", type=_interval, metavar="LO:HI",
+                   help="bounds of an unknown payload mass on the last link [kg] instead of a box")
+    b.add_argument("--payload-com", type=_vector3, metavar="X,Y,Z",
+                   help="payload CoM in the last joint's frame [m] (default 0,0,0)")
     b.add_argument("--json", action="store_true", help="one JSON object on stdout")
 
     r = sub.add_parser("run", help="simulate one controller on one plant")
@@ -151,6 +225,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--engine", choices=ENGINES, help="simulator (default auto: fast when compiled, else python)")
     r.add_argument("--out", help="output directory (default out/run/<name>, e.g. out/run/robust-perturbed)")
     r.add_argument("--force", action="store_true", help="replace an earlier result in --out")
+    plant_args(r)
     r.add_argument("--animate", nargs="?", const="gif", choices=("gif", "mp4"),
                    help="also write animation.gif (or .mp4, needs ffmpeg): the arm tracking its trajectory")
 

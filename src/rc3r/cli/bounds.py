@@ -48,13 +48,62 @@ def _compute(robot, box):
     return a, b, s_a, s_b, rho_a_box, rho_a_i
 
 
+def _robot(args):
+    """The nominal robot: ``--robot`` (default the paper's arm) or ``--urdf`` (the 3R's closed form when
+    the URDF is that arm, else any serial arm through Pinocchio), with ``--lock``."""
+    from ..errors import UrdfError
+    from ..study import _nominal
+
+    urdf, name = getattr(args, "urdf", None), getattr(args, "robot", None)
+    lock = dict(args.lock) if getattr(args, "lock", None) else None
+    if urdf is not None and name is None and not lock:
+        try:
+            return robot_class(DEFAULT_ROBOT).from_urdf(urdf)
+        except UrdfError as exc:
+            if "not the 3R arm" not in str(exc):
+                raise
+    if urdf is None and name is None and not lock:
+        return robot_class(DEFAULT_ROBOT).from_urdf(None)
+    return _nominal(name, urdf, lock)
+
+
+def _payload(args, robot) -> int:
+    """``rc3r bounds --payload LO:HI [--payload-com X,Y,Z]``: exact theta_0, rho, rho_i of the payload range."""
+    from ..uncertainty.payload import payload_bounds
+
+    (lo, hi), com = args.payload, np.zeros(3) if args.payload_com is None else np.asarray(args.payload_com, float)
+    with np.errstate(all="ignore"):
+        b = payload_bounds(robot, (lo, hi), com)
+        rho, rho_i = certified_radius(b, b.theta0)
+    out = {"nominal": {"robot": getattr(robot, "robot_name", robot.name), "urdf": getattr(robot, "urdf", None),
+                       "locked": dict(getattr(robot, "locked", {}) or {}), "n": robot.n, "p": robot.p,
+                       "theta": _floats(robot.theta)},
+           "payload": {"mass": [lo, hi], "com": _floats(com)},
+           "theta0": _floats(b.theta0), "rho": float(rho), "rho_i": _floats(rho_i),
+           "theta_lo": _floats(b.theta_lo), "theta_hi": _floats(b.theta_hi),
+           "definition": "exact: theta is affine in the payload mass, so the segment's ends are the ranges; "
+                         "theta0 = its centre, rho = sqrt(sum rho_i^2)"}
+    bad = _first_non_finite(out)
+    if bad is not None:
+        raise ParameterError(f"the payload bounds overflow double precision ({bad} is not finite)")
+    if getattr(args, "json", False):
+        print(json.dumps(out, indent=2, allow_nan=False))
+        return EXIT["ok"]
+    print(f"nominal robot: {out['nominal']['robot']} ({robot.n} joints, {robot.p} base parameters)")
+    print(f"payload: {lo:g}..{hi:g} kg at {tuple(float(c) for c in com)} m in the last joint's frame")
+    print(f"rho = {rho:.6g} (exact over the payload range); theta0 and rho_i with --json")
+    return EXIT["ok"]
+
+
 def cmd_bounds(args) -> int:
     """``rc3r bounds [--box FILE] [--urdf PATH] [--json]``: both methods side by side.
 
     Every number printed is finite: a result that overflowed (NaN, infinity) is refused in one line
     naming it, and the JSON is strict (``allow_nan=False``).
     """
-    robot = robot_class(DEFAULT_ROBOT).from_urdf(getattr(args, "urdf", None))
+    robot = _robot(args)
+    if getattr(args, "payload", None) is not None:
+        return _payload(args, robot)
     box = resolve_box(robot, getattr(args, "box", None))
     a, b, s_a, s_b, rho_a_box, rho_a_i = _compute(robot, box)
     out = {

@@ -34,6 +34,29 @@ def _fmt3(x) -> str:
     return " ".join(f"{v:.3g}" for v in x)
 
 
+def verdict_text(m: dict) -> str:
+    """``clean, within 0.01 rad`` / ``chattering (joints 1, 3), tolerance 0.01 rad missed`` ...: the
+    first words of a run's summary line."""
+    word = m.get("verdict", m.get("status"))
+    if word == "chattering" and m.get("chattering_joints"):
+        word += f" (joints {', '.join(str(j) for j in m['chattering_joints'])})"
+    if word == "saturated" and m.get("saturation_fraction") is not None:
+        word += f" ({100 * m['saturation_fraction']:.1f} % of samples at a torque limit)"
+    met = m.get("tolerance_met")
+    if met is not None:
+        word += f", {'within' if met else 'outside'} {m['tolerance']:g} rad"
+    return word
+
+
+def plant_options(args) -> dict:
+    """The arm and plant keywords of :func:`rc3r.build_run` from the options of :func:`rc3r.cli.plant_args`."""
+    out = {k: getattr(args, k, None) for k in ("urdf", "friction", "torque_limit", "noise", "delay",
+                                               "plant_engine", "tolerance")}
+    locks = getattr(args, "lock", None)
+    out["lock"] = dict(locks) if locks else None
+    return out
+
+
 def describe_model(spec) -> str:
     """What the plant is and what the controller knows of it, for the run's announcement.
 
@@ -54,7 +77,28 @@ def describe_model(spec) -> str:
         out += f", rho = {model['rho']:.6g} ({short(model.get('rho_source'))})"
     if model.get("rho_i") is not None:
         out += ", rho_i certified"
-    return out
+    return out + _effects_text(spec)
+
+
+def _effects_text(spec) -> str:
+    """``; plant effects: friction (urdf), saturation (urdf); loop: noise, delay 2`` or ``""``."""
+    plant, loop = getattr(spec, "true_plant", None), getattr(spec, "loop", None)
+    parts = []
+    if plant is not None:
+        fx = [f"{e.name} ({getattr(e, 'source', 'config')})" for e in plant.effects]
+        rigid = getattr(plant.rigid, "engine_name", None) or ("mujoco" if hasattr(plant.rigid, "advance") else None)
+        if fx:
+            parts.append("plant effects: " + ", ".join(fx))
+        if rigid:
+            parts.append(f"plant engine {rigid}")
+    if loop is not None:
+        d = loop.describe()
+        bits = [k for k in ("noise_q", "noise_qd", "quantization", "q0_error", "qd0_error") if any(d[k])]
+        if d["delay"]:
+            bits.append(f"delay {d['delay']} samples")
+        if bits:
+            parts.append("loop: " + ", ".join(bits) + f" (seed {d['seed']})")
+    return "".join("; " + p for p in parts)
 
 
 def cmd_run(args) -> int:
@@ -66,7 +110,7 @@ def cmd_run(args) -> int:
     cfg = {} if args.config is None else read_toml(args.config, "config file")
     spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
                      eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
-                     payload=args.payload, payload_com=args.payload_com, config=cfg)
+                     payload=args.payload, payload_com=args.payload_com, config=cfg, **plant_options(args))
     out = Path(args.out if args.out is not None else Path("out") / "run" / spec.name)
     check_output_path(out)  # before anything is announced or simulated
     if out.is_dir() and any(out.iterdir()) and not args.force:
@@ -101,8 +145,9 @@ def cmd_run(args) -> int:
         print(f"rc3r: interrupted while writing the animation: the run is written to {out}/ without it",
               file=sys.stderr)
         return EXIT["interrupted"]
-    print(f"{spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, final bound = {_fmt3(m['final_error_bound'])} rad, "
-          f"chattering = {_fmt3(m['chattering'])} N m/s, wall {m['wall_time_s']:.2f} s -> {out}/")
+    print(f"{verdict_text(m)}: {spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, "
+          f"final bound = {_fmt3(m['final_error_bound'])} rad, chattering = {_fmt3(m['chattering'])} N m/s, "
+          f"wall {m['wall_time_s']:.2f} s -> {out}/")
     try:
         res.raise_for_status()
     except DivergenceError as exc:

@@ -22,7 +22,11 @@ from .loop import LoopEffects
 from .saturation import Saturation
 
 __all__ = ["Plant", "Effect", "EFFECTS", "register_effect", "as_plant", "Friction", "Saturation",
-           "JointLimits", "crossings", "LoopEffects", "build_effects", "build_loop", "PLANT_KEYS"]
+           "JointLimits", "crossings", "LoopEffects", "build_effects", "build_loop", "resolve", "PLANT_KEYS",
+           "PLANT_ENGINES"]
+
+#: Rigid-body engines of a plant (``--plant-engine``).
+PLANT_ENGINES = ("pinocchio", "mujoco")
 
 #: Keys of a ``[plant]`` configuration table that describe effects (besides spec, urdf, box).
 PLANT_KEYS = ("friction", "torque_limit", "limits", "noise", "quantization", "delay", "q0_error", "qd0_error",
@@ -103,3 +107,52 @@ def build_loop(n: int, noise=None, quantization=None, delay=None, q0_error=None,
     return LoopEffects(n, noise_q=sq, noise_qd=sqd, quantization=0.0 if quantization is None else quantization,
                        delay=0 if delay is None else delay, q0_error=0.0 if q0_error is None else q0_error,
                        qd0_error=0.0 if qd0_error is None else qd0_error, seed=seed)
+
+
+def _mujoco_rigid(robot):
+    """MuJoCo's rigid body of ``robot``: its URDF (or, for a robot that ships one, the physically
+    consistent arm with the same theta: ``robot.mujoco_urdf()``). Refused for a plant whose
+    parameters are not its URDF's own (a drawn or payload plant): MuJoCo reads them from the file."""
+    from .mujoco import MujocoRigidBody
+
+    own = getattr(robot, "mujoco_urdf", None)
+    if own is not None:
+        path = own()
+        if path is None:
+            raise ConfigError(f"--plant-engine mujoco simulates a URDF's own parameters; plant '{robot.label}' "
+                              "is not the nominal arm")
+        return MujocoRigidBody.from_urdf(path, g0=float(-robot.model.gravity.linear[2]))
+    urdf = getattr(robot, "urdf", None)
+    if urdf is None:
+        raise ConfigError(f"--plant-engine mujoco needs a URDF; plant '{robot.label}' has none")
+    locked = dict(getattr(robot, "locked", {}) or {})
+    reread = type(robot).from_urdf(urdf, lock=locked or None)
+    if not np.allclose(reread.standard_parameters(), robot.standard_parameters(), rtol=1e-12, atol=1e-12):
+        raise ConfigError(f"--plant-engine mujoco simulates the URDF's own parameters; plant '{robot.label}' "
+                          "differs from them (a drawn or payload plant): use --plant-engine pinocchio")
+    return MujocoRigidBody.from_urdf(urdf, locked=locked or None, g0=float(-robot.model.gravity.linear[2]),
+                                     joint_names=getattr(robot, "joint_names", None))
+
+
+def resolve(robot, table: dict | None = None, *, rate=None, seed: int = 0, rng=None, **options):
+    """The plant of a run and its loop: ``(Plant, LoopEffects or None, plant engine)``.
+
+    ``table`` is a configuration's ``[plant]`` table (keys :data:`PLANT_KEYS`); ``options`` the
+    command line's (``friction``, ``torque_limit``, ``noise``, ``delay``, ``quantization``,
+    ``plant_engine``), which win where given. ``robot`` is the true rigid body (Pinocchio or the
+    closed form); ``rng`` draws uncertain friction ranges (a campaign's per-plant generator);
+    ``seed`` seeds the sensor noise unless ``noise_seed`` is given.
+    """
+    cfg = {k: v for k, v in (table or {}).items() if k in PLANT_KEYS}
+    cfg.update({k: v for k, v in options.items() if v is not None})
+    engine = cfg.pop("plant_engine", cfg.pop("engine", "pinocchio"))
+    if engine not in PLANT_ENGINES:
+        raise ConfigError(f"plant engine must be one of {', '.join(PLANT_ENGINES)}, got {engine!r}")
+    limits = cfg.get("limits", "urdf" if hasattr(robot, "urdf") and getattr(robot, "urdf", None) else None)
+    effects = build_effects(robot, friction=cfg.get("friction"), torque_limit=cfg.get("torque_limit"),
+                            limits=limits, rng=rng)
+    loop = build_loop(robot.n, noise=cfg.get("noise"), quantization=cfg.get("quantization"), delay=cfg.get("delay"),
+                      q0_error=cfg.get("q0_error"), qd0_error=cfg.get("qd0_error"),
+                      seed=int(cfg.get("noise_seed", seed)))
+    rigid = _mujoco_rigid(robot) if engine == "mujoco" else robot
+    return Plant(rigid, effects, label=robot.label), loop, engine

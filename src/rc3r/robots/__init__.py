@@ -47,6 +47,7 @@ def load_robot(name: str = DEFAULT_ROBOT, urdf=None) -> Robot:
     return cls.nominal(name) if cls.name != name else cls.nominal()
 
 
-def load_urdf_robot(path) -> Robot:
-    """Any serial URDF arm, as a :class:`~rc3r.robots.pinocchio.PinocchioRobot`."""
-    return robot_class("ur5").from_urdf(path)
+def load_urdf_robot(path, lock: dict | None = None) -> Robot:
+    """Any serial URDF arm, as a :class:`~rc3r.robots.pinocchio.PinocchioRobot` (joints of ``lock``,
+    ``{name: value}``, fixed at their value)."""
+    return robot_class("ur5").from_urdf(path, lock=lock or None)

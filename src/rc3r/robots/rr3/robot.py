@@ -90,6 +90,30 @@ class RR3(Robot):
 
         return write_urdf(load_params(params_path) if params_path else table1(), out)
 
+    def mujoco_urdf(self):
+        """The URDF MuJoCo simulates for this arm: the physically consistent arm with Table 1's theta
+        (``data/rr3_consistent.toml``, docs/model.md; MuJoCo refuses Table 1 itself), written once into
+        the user's cache; None unless this is the nominal parameter set (its theta is Table 1's)."""
+        import os
+        import tempfile
+
+        from .params import theta
+
+        if not np.allclose(self.theta, theta(table1()), rtol=0, atol=1e-12):
+            return None
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rc3r"
+        try:
+            base.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            base = Path(tempfile.gettempdir())
+        import hashlib
+
+        params = Path(__file__).parent / "data" / "rr3_consistent.toml"
+        out = base / f"rr3_consistent-{hashlib.sha256(params.read_bytes()).hexdigest()[:12]}.urdf"
+        if not out.is_file():
+            self.make_urdf(params, out)
+        return out
+
     @classmethod
     def paper_study(cls):
         """The paper's study of this arm (:mod:`rc3r.robots.rr3.paper`): scenarios and claims."""
