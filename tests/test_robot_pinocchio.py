@@ -327,11 +327,25 @@ def test_refused_urdfs(tmp_path):
     _urdf_error(tmp_path, TOY, "unknown joint", lock={"elbow": 0.0})
 
 
-def test_bench_regressor_reports_times(ur5):
-    """bench_regressor returns positive per-state times and their ratio (timing itself not asserted)."""
+def test_bench_regressor_reports_times(ur5, monkeypatch):
+    """bench_regressor times what it says (its ratio is the quotient of the two times it prints) and
+    the regressor it timed is right (Y(q, qd, qd, a) theta == pin.rnea to 1e-12 relative, the
+    identity, at its own states). A wrong regressor (theta off by 1 % in one column) is caught by the
+    same number: the benchmark never reports the speed of a wrong result."""
     out = bench_regressor(ur5, n=50, seed=0, repeat=1)
     assert out["robot"] == "ur5" and out["states"] == 50 and out["p"] == 36
-    assert all(out[k] > 0 for k in ("regressor_us", "regressor_single_us", "rnea_us", "pinocchio_path_us", "ratio"))
+    assert out["ratio"] == pytest.approx(out["regressor_us"] / out["rnea_us"], rel=1e-12)
+    assert all(out[k] > 0 for k in ("regressor_us", "regressor_single_us", "rnea_us", "pinocchio_path_us"))
+    assert out["max_rel_error_vs_rnea"] < 1e-12
+    real = type(ur5).regressor
+
+    def wrong(self, q, qd, v, a):
+        Y = real(self, q, qd, v, a).copy()
+        Y[..., 3] *= 1.01
+        return Y
+
+    monkeypatch.setattr(type(ur5), "regressor", wrong)
+    assert bench_regressor(ur5, n=20, seed=0, repeat=1)["max_rel_error_vs_rnea"] > 1e-6
 
 
 @pytest.mark.parametrize("law", ["fbl", "pd", "robust-rho0"])
