@@ -1,0 +1,214 @@
+"""``rc3r identify`` (coefficients, friction and bounds from a log) and ``rc3r excite`` (a trajectory to log).
+
+Library: :mod:`rc3r.identify`; guide: ``docs/identification.md``.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..errors import ConfigError
+from ..robots import ROBOTS
+from . import EXIT
+
+__all__ = ["add_parsers", "cmd_identify", "cmd_excite", "OWN_ENTRIES"]
+
+#: What ``rc3r identify`` writes in --out (a rerun replaces these; other files are kept).
+OWN_ENTRIES = ("identified.json", "bounds.toml", "torque.png", "residuals.png")
+
+
+def _fraction(text):
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 < x < 1.0:
+        raise argparse.ArgumentTypeError(f"must be between 0 and 1 (exclusive), got {text}")
+    return x
+
+
+def _kinds(text):
+    from ..identify.regressors import parse_friction
+
+    try:
+        return parse_friction(text)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _arm_args(p, positive, lock) -> None:
+    g = p.add_mutually_exclusive_group(required=True)
+    g.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)})")
+    g.add_argument("--urdf", help="the arm's URDF (any serial arm through Pinocchio)")
+    p.add_argument("--lock", type=lock, action="append", metavar="JOINT=VALUE",
+                   help="fix a joint of the URDF at VALUE (repeatable)")
+    p.add_argument("--seed", type=positive(int, allow_zero=True), default=0, help="RNG seed (default 0)")
+
+
+def add_parsers(sub, positive, lock) -> None:
+    """Add ``identify`` and ``excite`` to the subparsers ``sub`` (``positive``, ``lock``: the CLI's converters)."""
+    i = sub.add_parser("identify", help="coefficients, friction, covariance and bounds.toml from a log")
+    i.add_argument("log", metavar="LOG", help="CSV (t, q1..qn, [qd1..qdn,] tau1..taun) or NPZ (t, q, [qd,] tau)")
+    _arm_args(i, positive, lock)
+    i.add_argument("--friction", type=_kinds, default=("viscous", "coulomb", "offset"), metavar="KINDS",
+                   help="friction columns per joint: comma-separated viscous, coulomb, offset, or none "
+                        "(default all three)")
+    i.add_argument("--filter", type=positive(), metavar="HZ",
+                   help="cut-off of the zero-phase low-pass [Hz] (default: chosen from the log's spectra)")
+    i.add_argument("--test-fraction", type=_fraction, default=0.2, metavar="F",
+                   help="last fraction of the log held out for validation (default 0.2)")
+    i.add_argument("--confidence", type=_fraction, default=0.95, metavar="C",
+                   help="confidence level of the ellipsoid and the prediction band (default 0.95)")
+    i.add_argument("--covariance", choices=("white", "robust"), default="white",
+                   help="white (default): from the in-band residual level; robust: also dominate the "
+                        "spectral (Whittle) covariance, for coloured low-frequency residuals")
+    i.add_argument("--velocities", choices=("auto", "logged", "differentiated"), default="auto",
+                   help="logged qd or differentiated q (default auto: the less noisy, from their spectra)")
+    i.add_argument("--no-consistency", action="store_true", help="skip the physical-consistency SDP (cvxpy)")
+    i.add_argument("--out", required=True, help="output directory (identified.json, bounds.toml, figures)")
+    i.add_argument("--force", action="store_true", help="replace an earlier result in --out")
+
+    e = sub.add_parser("excite", help="an exciting trajectory (Fourier series, condition number minimised)")
+    _arm_args(e, positive, lock)
+    e.add_argument("--duration", type=positive(), required=True, metavar="T", help="period and length [s]")
+    e.add_argument("--harmonics", type=positive(int), default=5, help="harmonics per joint (default 5)")
+    e.add_argument("--max-velocity", type=positive(), metavar="RAD_S",
+                   help="velocity bound [rad/s] (default min(2, 0.8 x the URDF's))")
+    e.add_argument("--max-acceleration", type=positive(), metavar="RAD_S2", help="acceleration bound (default 10)")
+    e.add_argument("--rate", type=positive(), default=1000.0, help="samples per second of the CSV (default 1000)")
+    e.add_argument("--starts", type=positive(int), default=1, help="random starts of the optimiser (default 1)")
+    e.add_argument("--synthetic-log", metavar="LOG",
+                   help="also simulate the arm tracking the trajectory (friction, sensor noise, quantized encoders, "
+                        "jittered stamps; docs/identification.md) and write the log an experiment would record")
+    e.add_argument("--out", required=True, metavar="TRAJ.CSV",
+                   help="the trajectory (t, q, qd, qdd); its coefficients go to the .json beside it")
+
+
+def _robot(args):
+    from ..study import _nominal
+
+    lock = dict(args.lock) if args.lock else None
+    return _nominal(args.robot, args.urdf, lock)
+
+
+def _note(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _fmt(xs, digits: int = 3) -> str:
+    return " ".join(f"{x:.{digits}g}" for x in xs)
+
+
+def cmd_identify(args) -> int:
+    """``rc3r identify LOG``: writes identified.json, bounds.toml, torque.png, residuals.png into --out."""
+    from ..identify.bounds_file import write_bounds
+    from ..identify.figures import residual_figure, torque_figure
+    from ..identify.log import load_log
+    from ..identify.pipeline import identify
+    from ..io import atomic_savefig, atomic_write_json
+    from ..provenance import provenance
+    from ._output import check_output_path, output_dir
+
+    out = Path(args.out)
+    check_output_path(out)
+    if out.is_dir() and any(out.iterdir()) and not args.force:
+        raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
+    robot = _robot(args)
+    log = load_log(args.log, n=robot.n)
+    _note(f"rc3r identify: {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s of {robot.label} "
+          f"(n = {robot.n}, p = {robot.p}, friction: {', '.join(args.friction) or 'none'}) ...")
+    res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
+                   confidence=args.confidence, velocities=args.velocities, consistency=not args.no_consistency,
+                   covariance=args.covariance, seed=args.seed)
+    prov = provenance(seed=args.seed)
+    data = res.to_dict() | {"provenance": prov}
+    lock = dict(args.lock) if args.lock else {}
+    ident = {"log": str(Path(args.log).resolve()), "log_sha256": log.sha256, "cutoff_hz": res.filter["cutoff_hz"],
+             "filter_chosen": res.filter["chosen"], "sigma": res.sigma.tolist(), "friction": list(res.friction_kinds),
+             "covariance": args.covariance, "quantile": res.ellipsoid["quantile"]}
+    flat_prov = {"rc3r": prov["versions"]["rc3r"], "created": prov["created"], "command": " ".join(prov["command"]),
+                 "git_commit": (prov.get("git") or {}).get("commit"), "git_dirty": (prov.get("git") or {}).get("dirty")}
+    with output_dir(out, own=OWN_ENTRIES) as tmp:
+        atomic_write_json(tmp / "identified.json", data)
+        write_bounds(tmp / "bounds.toml", res.bounds(), robot, robot_name=args.robot,
+                     urdf=None if args.urdf is None else str(Path(args.urdf).resolve()), lock=lock, seed=args.seed,
+                     identification=ident, provenance=flat_prov)
+        atomic_savefig(torque_figure(res), tmp / "torque.png", dpi=110)
+        atomic_savefig(residual_figure(res), tmp / "residuals.png", dpi=110)
+    v, f = res.validation, res.filter
+    print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}; "
+          f"{res.regressor['rows']} rows, condition number {res.regressor['condition_number']:.3g}")
+    print(f"held-out rms [N m]: {_fmt(v['rms'])} (logged), {_fmt(v['rms_filtered'])} (low-passed), "
+          f"{_fmt(v['rms_nominal'])} (the robot's own coefficients)")
+    print(f"inside the {100 * v['band_confidence']:g} % prediction band: {100 * v['inside_band']:.1f} % of "
+          f"{v['samples']} held-out samples x {robot.n} joints")
+    c = res.consistency
+    if c is None:
+        print("physical consistency: not checked (--no-consistency)")
+    elif not c.get("checked"):
+        print(f"physical consistency: not checked ({c['reason']})")
+    else:
+        print("physical consistency: " + ("the estimate is realised by consistent standard parameters"
+                                          if c["consistent"] else
+                                          f"the nearest consistent coefficients are {c['mahalanobis']:.3g} standard "
+                                          f"deviations away ({'inside' if c['within_ellipsoid'] else 'outside'} "
+                                          "the ellipsoid)"))
+    print(f"bounds at {100 * res.ellipsoid['confidence']:g} %: rho = {res.ellipsoid['rho']:.4g}, "
+          f"max rho_i = {max(res.ellipsoid['rho_i']):.4g} -> {out}/bounds.toml, identified.json, torque.png, "
+          "residuals.png")
+    return EXIT["ok"]
+
+
+def cmd_excite(args) -> int:
+    """``rc3r excite``: writes the trajectory CSV and its coefficients (.json beside it); optionally a log."""
+    import json
+
+    import numpy as np
+
+    from ..identify.excitation import excite, limits_of
+    from ..identify.log import save_log
+    from ..io import atomic_write_text
+    from ..provenance import provenance
+
+    out = Path(args.out)
+    if out.suffix.lower() != ".csv":
+        raise ConfigError(f"--out {out} must name a .csv file")
+    if out.is_dir():
+        raise ConfigError(f"--out {out} is a directory; give a .csv file")
+    log_path = None if args.synthetic_log is None else Path(args.synthetic_log)
+    if log_path is not None and log_path.suffix.lower() not in (".csv", ".npz"):
+        raise ConfigError(f"--synthetic-log {log_path} must name a .csv or .npz file")
+    robot = _robot(args)
+    lim = limits_of(robot, args.max_velocity, args.max_acceleration)
+    _note(f"rc3r excite: {args.harmonics} harmonics per joint over {args.duration:g} s for {robot.label}, "
+          f"seed {args.seed} (SLSQP, {args.starts} start(s)) ...")
+    ex = excite(robot, args.duration, seed=args.seed, harmonics=args.harmonics, limits=lim, starts=args.starts,
+                check_rate=args.rate)
+    t = np.arange(0.0, args.duration + 0.5 / args.rate, 1.0 / args.rate)
+    q, qd, qdd = ex.trajectory.evaluate(t)
+    n = robot.n
+    names = ["t"] + [f"{k}{j}" for k in ("q", "qd", "qdd") for j in range(1, n + 1)]
+    table = np.column_stack([t, q, qd, qdd])
+    atomic_write_text(out, ",".join(names) + "\n" + "\n".join(",".join(f"{x:.12g}" for x in row) for row in table)
+                      + "\n")
+    terms = [[int(j), float(A), float(w), float(ph)] for j, A, w, ph in ex.trajectory.terms]
+    meta = ex.describe() | {"config": {"trajectory": {"kind": "sines", "offset": list(ex.trajectory.offset),
+                                                      "terms": terms}},
+                            "provenance": provenance(seed=args.seed)}
+    atomic_write_text(out.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
+    print(f"regressor condition number: {ex.condition:.4g} (column-scaled [Y | viscous, coulomb, offset]); "
+          f"the robot's default sine trajectory over the same {args.duration:g} s: {ex.baseline_condition:.4g} "
+          f"({ex.baseline_condition / ex.condition:.3g}x worse)")
+    print(f"trajectory: {out} ({t.size} samples at {args.rate:g} Hz), coefficients: {out.with_suffix('.json')}")
+    if log_path is not None:
+        from ..identify.synthetic import synthetic_log
+
+        _note("rc3r excite: simulating the arm tracking it (friction, sensor noise, encoder, jittered stamps) ...")
+        log, truth = synthetic_log(robot, ex.trajectory, args.duration, seed=args.seed)
+        save_log(log, log_path)
+        truth_path = log_path.with_suffix(".truth.json")
+        atomic_write_text(truth_path, json.dumps({k: (v.tolist() if hasattr(v, "tolist") else v)
+                                                  for k, v in truth.items()}, indent=2) + "\n")
+        print(f"synthetic log: {log_path} ({log.samples} samples), its true coefficients: {truth_path}")
+    return EXIT["ok"]

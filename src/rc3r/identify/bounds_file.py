@@ -1,0 +1,199 @@
+r"""``bounds.toml``: the identified bounds a robust controller is designed from.
+
+Written by ``rc3r identify`` (:func:`write_bounds`), read by :func:`load_bounds`. Keys:
+
+=====================  ===============================================================
+``format``             ``"rc3r-bounds/1"``
+``robot``              registry name of the arm (``"ur5"``, ``"rr3"``), or absent
+``urdf``               the URDF it was identified with, or absent (one of the two is given)
+``lock``               joints locked in that URDF (table name -> value), optional
+``n``, ``p``           joints and coefficients
+``coefficient_names``  the p coefficients, in order (the robot's ``coefficient_names``)
+``confidence``         level C of the ellipsoid
+``quantile``           the quantile q it used (``chi2_p(C)`` or ``p F_{p,nu}(C)``)
+``seed``               the seed of the identification
+``theta0``             (p,) the estimate
+``P``                  (p, p) the ellipsoid ``(theta - theta0)^T P (theta - theta0) <= 1``
+``rho``                radius of the smallest ball about theta0 containing it (eq. 6's bound)
+``rho_i``              (p,) half-widths of the smallest box containing it (eq. 7's bounds)
+``[identification]``   log, digest, filter, noise (for the record)
+``[provenance]``       versions, git commit, command line, time
+=====================  ===============================================================
+
+Every refusal of :func:`load_bounds` is one :class:`~rc3r.errors.ConfigError` (a missing or
+malformed file, a missing or mistyped key, wrong lengths) or
+:class:`~rc3r.errors.ParameterError` (non-finite numbers, ``P`` not symmetric positive
+definite, ``rho`` or ``rho_i`` that do not contain the ellipsoid, a robot of other sizes or
+coefficients).
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError, ParameterError
+
+__all__ = ["FORMAT", "write_bounds", "load_bounds", "to_toml"]
+
+FORMAT = "rc3r-bounds/1"
+
+#: Relative slack of the containment checks (ball and box around the ellipsoid).
+CONTAIN_RTOL = 1e-9
+
+
+def _value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        x = float(v)
+        if not math.isfinite(x):
+            raise ParameterError(f"cannot write a non-finite number ({x}) to a bounds file")
+        return repr(x)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v if x is not None) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(str(k))} = {_value(x)}" for k, x in v.items() if x is not None) + "}"
+    return json.dumps(str(v))
+
+
+def to_toml(data: dict, header: str = "") -> str:
+    """A small TOML writer: scalars, strings, (nested) lists first, then sub-tables; ``None`` omitted."""
+    lines = [f"# {line}" for line in header.splitlines()]
+
+    def emit(prefix, table):
+        scalars = {k: v for k, v in table.items() if v is not None and not isinstance(v, dict)}
+        subs = {k: v for k, v in table.items() if isinstance(v, dict)}
+        if prefix:
+            lines.append(f"\n[{prefix}]")
+        for k, v in scalars.items():
+            lines.append(f"{json.dumps(str(k)) if not str(k).isidentifier() else k} = {_value(v)}")
+        for k, v in subs.items():
+            emit(f"{prefix}.{k}" if prefix else str(k), v)
+
+    emit("", data)
+    return "\n".join(lines) + "\n"
+
+
+def write_bounds(path, bounds: dict, robot, *, robot_name: str | None = None, urdf: str | None = None,
+                 lock: dict | None = None, seed: int = 0, identification: dict | None = None,
+                 provenance: dict | None = None) -> Path:
+    """Write ``bounds`` (``theta0, P, rho, rho_i, confidence, chi2``) of ``robot`` to ``path`` atomically."""
+    from ..io import atomic_write_text
+
+    data = {"format": FORMAT, "robot": robot_name, "urdf": None if urdf is None else str(urdf),
+            "n": int(robot.n), "p": int(robot.p), "coefficient_names": list(robot.coefficient_names),
+            "confidence": float(bounds["confidence"]), "quantile": float(bounds["chi2"]), "seed": int(seed),
+            "theta0": np.asarray(bounds["theta0"], float), "rho": float(bounds["rho"]),
+            "rho_i": np.asarray(bounds["rho_i"], float), "P": np.asarray(bounds["P"], float)}
+    if lock:
+        data["lock"] = {str(k): float(v) for k, v in lock.items()}
+    if identification:
+        data["identification"] = identification
+    if provenance:
+        data["provenance"] = provenance
+    header = ("Bounds on the dynamic coefficients identified from a log (rc3r identify).\n"
+              "(theta - theta0)^T P (theta - theta0) <= 1 at the confidence level; ||theta - theta0|| <= rho;\n"
+              "|theta_i - theta0_i| <= rho_i. Read with rc3r.identify.bounds_file.load_bounds.")
+    return atomic_write_text(path, to_toml(data, header))
+
+
+def _numbers(path, key, value, shape) -> np.ndarray:
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"bounds file {path}: {key} must be numbers") from None
+    if arr.shape != shape:
+        raise ConfigError(f"bounds file {path}: {key} has shape {arr.shape}, expected {shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"bounds file {path}: {key} has non-finite entries")
+    return arr
+
+
+def load_bounds(path, robot=None) -> dict:
+    """Read and validate a ``bounds.toml`` (module docstring); optionally check it fits ``robot``.
+
+    Returns
+    -------
+    dict
+        ``theta0`` (p,), ``rho`` (float), ``rho_i`` (p,), ``P`` (p, p) (ndarrays, read-only),
+        ``n``, ``p``, ``robot`` (str or None), ``urdf`` (str or None), ``lock`` (dict),
+        ``coefficient_names`` (tuple), ``confidence``, ``quantile``, ``seed``, ``format``,
+        ``source`` (the path), ``identification``, ``provenance`` (dicts, possibly empty).
+    """
+    from ..io import read_toml
+
+    data = read_toml(path, "bounds file")
+    if data.get("format") != FORMAT:
+        raise ConfigError(f"bounds file {path}: format must be {FORMAT!r}, got {data.get('format')!r}")
+    known = {"format", "robot", "urdf", "lock", "n", "p", "coefficient_names", "confidence", "quantile", "seed",
+             "theta0", "rho", "rho_i", "P", "identification", "provenance"}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise ConfigError(f"bounds file {path}: unknown key(s) {', '.join(unknown)}")
+    for key in ("n", "p", "theta0", "rho", "rho_i", "P", "coefficient_names", "confidence"):
+        if key not in data:
+            raise ConfigError(f"bounds file {path}: missing key {key!r}")
+    n, p = data["n"], data["p"]
+    if not (isinstance(n, int) and isinstance(p, int) and n > 0 and p > 0) or isinstance(n, bool) or isinstance(p, bool):
+        raise ConfigError(f"bounds file {path}: n and p must be positive integers, got {n!r}, {p!r}")
+    robot_name, urdf = data.get("robot"), data.get("urdf")
+    if robot_name is None and urdf is None:
+        raise ConfigError(f"bounds file {path}: names no robot (give robot = NAME or urdf = PATH)")
+    for key, v in (("robot", robot_name), ("urdf", urdf)):
+        if v is not None and not isinstance(v, str):
+            raise ConfigError(f"bounds file {path}: {key} must be a string, got {v!r}")
+    lock = data.get("lock", {})
+    if not isinstance(lock, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                             for v in lock.values()):
+        raise ConfigError(f"bounds file {path}: lock must be a table of joint = value")
+    names = data["coefficient_names"]
+    if not (isinstance(names, list) and len(names) == p and all(isinstance(s, str) for s in names)):
+        raise ConfigError(f"bounds file {path}: coefficient_names must be {p} strings")
+    conf = data["confidence"]
+    if isinstance(conf, bool) or not isinstance(conf, (int, float)) or not 0.0 < conf < 1.0:
+        raise ConfigError(f"bounds file {path}: confidence must be a number between 0 and 1, got {conf!r}")
+    theta0 = _numbers(path, "theta0", data["theta0"], (p,))
+    rho_i = _numbers(path, "rho_i", data["rho_i"], (p,))
+    P = _numbers(path, "P", data["P"], (p, p))
+    rho = _numbers(path, "rho", data["rho"], ())
+    if rho < 0 or np.any(rho_i < 0):
+        raise ParameterError(f"bounds file {path}: rho and rho_i must be >= 0")
+    if not np.allclose(P, P.T, rtol=1e-9, atol=1e-12 * np.abs(P).max()):
+        raise ParameterError(f"bounds file {path}: P is not symmetric")
+    try:
+        np.linalg.cholesky(P)
+    except np.linalg.LinAlgError:
+        raise ParameterError(f"bounds file {path}: P is not positive definite (not an ellipsoid)") from None
+    Pinv = np.linalg.inv(P)
+    if rho < np.sqrt(np.linalg.eigvalsh(Pinv)[-1]) * (1 - CONTAIN_RTOL):
+        raise ParameterError(f"bounds file {path}: rho = {float(rho):.6g} does not contain the ellipsoid P "
+                             f"(its largest semi-axis is {np.sqrt(np.linalg.eigvalsh(Pinv)[-1]):.6g})")
+    short = np.nonzero(rho_i < np.sqrt(np.diag(Pinv)) * (1 - CONTAIN_RTOL))[0]
+    if short.size:
+        raise ParameterError(f"bounds file {path}: rho_i of {names[short[0]]} does not contain the ellipsoid P")
+    if robot is not None:
+        if (robot.n, robot.p) != (n, p):
+            raise ParameterError(f"bounds file {path} is for an arm with n = {n}, p = {p}; robot "
+                                 f"'{robot.label}' has n = {robot.n}, p = {robot.p}")
+        if tuple(robot.coefficient_names) != tuple(names):
+            k = next(i for i, (a, b) in enumerate(zip(robot.coefficient_names, names)) if a != b)
+            raise ParameterError(f"bounds file {path}: coefficient {k + 1} is {names[k]!r}, robot "
+                                 f"'{robot.label}' calls it {robot.coefficient_names[k]!r} (another arm?)")
+    out = {"theta0": theta0, "rho": float(rho), "rho_i": rho_i, "P": P}
+    for arr in (theta0, rho_i, P):
+        arr.flags.writeable = False
+    seed = data.get("seed", 0)
+    return out | {"n": n, "p": p, "robot": robot_name, "urdf": urdf, "lock": dict(lock),
+                  "coefficient_names": tuple(names), "confidence": float(conf),
+                  "quantile": float(data.get("quantile", float("nan"))), "seed": int(seed) if isinstance(seed, int) else 0,
+                  "format": FORMAT, "source": str(path), "identification": dict(data.get("identification", {})),
+                  "provenance": dict(data.get("provenance", {}))}

@@ -1,0 +1,272 @@
+r"""Weighted least squares with per-joint noise, the parameter covariance, the confidence ellipsoid.
+
+Model: ``y_tj = A_tj x + e_tj`` for rows ``t`` and joints ``j``, where ``A`` and ``y`` are the
+low-passed regressor and torques of :mod:`rc3r.identify.filtering` (``L[Phi]`` and ``L[tau]``
+on the coarse grid) and ``e_tj = L[w_j]`` is white sensor noise ``w_j`` of standard
+deviation ``sigma_j`` (per sample at the log's rate; drives and sensors differ per joint)
+after the same filter.
+
+Estimate (:func:`weighted_least_squares`)
+    Ordinary least squares first; then ``sigma_j`` from the residuals and least squares again
+    with weights ``1/sigma_j``; twice. Solved by the normal equations of the column-scaled
+    weighted matrix (condition number at most :data:`COND_MAX`, checked first) with one step of
+    iterative refinement.
+
+Noise and covariance
+    The filtered noise is coloured, and what survives the filter need not be white either
+    (differentiated encoder noise in the regressor grows as ``f^4``; unmodelled dynamics sit at
+    low frequencies). The covariance is the sandwich
+
+    .. math::  \mathrm{Cov}(\hat x) = H^{-1} B H^{-1}, \qquad H = Z^T Z, \qquad
+               B = \mathrm{Var}(Z^T e) = \frac{1}{M}\sum_k \sum_j \hat Z_j(\omega_k)^* \hat Z_j(\omega_k)^T\,
+               s_j(\omega_k),
+
+    ``Z`` the rows weighted by ``w_j``, ``\hat Z_j`` their discrete Fourier transform over the
+    rows of joint ``j`` (zero-padded to ``M = 2N``), and ``s_j = w_j^2 |L|^2 S_j f_2 / 2`` the
+    spectral density of the rows' noise: ``|L(f)|^2`` the filter's power response and ``S_j`` the
+    one-sided power spectrum [N^2 m^2/Hz] of the **unfiltered** residual (Welch, at the logged
+    stamps), ``f_2`` the rows' rate (Whittle's approximation; exact when the noise's correlation
+    dies out within ``N`` rows). For white noise ``S_j = 2 sigma_j^2 / f_s`` this is
+    ``(1/D) (L Z)^T (L Z)`` (Parseval), and without filtering the Gauss--Markov
+    ``(A^T W A)^{-1}``. ``sigma_j`` reported is the white-equivalent level from the filtered
+    residual: ``||r_j||^2 = sigma_j^2 (N G - m/(n D))`` with ``G`` the filter's noise gain
+    (:func:`rc3r.identify.filtering.noise_gain`) and ``D`` the coarse grid's step.
+
+Confidence ellipsoid (:func:`ellipsoid`)
+    ``x`` is approximately normal, so the dynamic coefficients ``theta`` (the first ``p``
+    unknowns) satisfy ``(theta - theta_hat)^T Cov_theta^{-1} (theta - theta_hat) <= chi2_p(C)``
+    with probability ``C``: the ellipsoid ``||theta - theta_0||_P <= 1`` with
+    ``P = Cov_theta^{-1} / chi2_p(C)``. The smallest ball about ``theta_0`` containing it has
+    ``rho = sqrt(lambda_max(P^{-1}))``, the smallest box ``rho_i = sqrt((P^{-1})_ii)``: the
+    robust laws' bounds (eqs. 6 and 7) hold with the same probability.
+
+Excitation (:func:`check_excitation`): a joint that does not move, or a regressor whose
+column-scaled condition number exceeds :data:`COND_MAX` (rank-deficient: the trajectory does
+not excite some combination of coefficients), is refused in one line naming the worst
+combination.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError
+
+__all__ = ["COND_MAX", "MOTION_MIN", "Fit", "check_excitation", "weighted_least_squares", "spectral_covariance",
+           "dominating", "ellipsoid"]
+
+#: Largest condition number of the column-scaled regressor that still counts as full rank.
+COND_MAX = 1e6
+
+#: A joint whose filtered position range is below this [rad or m] does not move.
+MOTION_MIN = 1e-2
+
+
+@dataclass(frozen=True, eq=False)
+class Fit:
+    """A weighted least-squares fit.
+
+    Attributes
+    ----------
+    x : ndarray (m,)
+        The estimate.
+    cov : ndarray (m, m)
+        Its covariance (module docstring).
+    sigma : ndarray (n,)
+        Per-joint standard deviation of the white noise before the filter (per sample of the log).
+    rows : int
+        Rows N used.
+    cond : float
+        Condition number of the column-scaled weighted regressor.
+    weights : ndarray (n,)
+        The per-joint weights of the last least squares.
+    """
+
+    x: np.ndarray
+    cov: np.ndarray
+    sigma: np.ndarray
+    rows: int
+    cond: float
+    weights: np.ndarray
+
+    def predict(self, A) -> np.ndarray:
+        """``A x``: (N, n) from (N, n, m)."""
+        return np.asarray(A) @ self.x
+
+    def band(self, A, sigma, confidence: float) -> np.ndarray:
+        """Half-width (N, n) of the two-sided prediction interval at ``confidence`` for new samples.
+
+        ``z sqrt(sigma_j^2 + a^T Cov a)`` with ``z`` the normal quantile and ``sigma`` (n,) the
+        noise of one new sample (a new torque carries the noise, the prediction the estimate's
+        uncertainty).
+        """
+        from scipy.stats import norm
+
+        A = np.asarray(A, dtype=float)
+        var = np.einsum("tjk,kl,tjl->tj", A, self.cov, A) + np.asarray(sigma, dtype=float) ** 2
+        return float(norm.ppf(0.5 + 0.5 * confidence)) * np.sqrt(var)
+
+
+def check_excitation(A, names, q) -> None:
+    """ConfigError unless every joint moves and the regressor (N, n, m) has full numerical rank.
+
+    ``q`` (N, n) are the filtered positions; ``names`` the m unknowns.
+    """
+    span = np.ptp(q, axis=0)
+    still = np.nonzero(span < MOTION_MIN)[0]
+    if still.size:
+        raise ConfigError("unexciting trajectory: joint(s) " + ", ".join(str(j + 1) for j in still)
+                          + f" do not move (position range {', '.join(f'{span[j]:.3g}' for j in still)}, "
+                          f"less than {MOTION_MIN:g}): the regressor is rank-deficient")
+    M = np.asarray(A, dtype=float).reshape(-1, A.shape[-1])
+    norms = np.linalg.norm(M, axis=0)
+    zero = np.nonzero(norms == 0.0)[0]
+    if zero.size:
+        raise ConfigError(f"unexciting trajectory: the regressor's column(s) {', '.join(names[k] for k in zero)} "
+                          "are zero (rank-deficient)")
+    Mn = M / norms
+    lam, vec = np.linalg.eigh(Mn.T @ Mn)  # squared singular values of the column-scaled regressor
+    cond = float(np.sqrt(lam[-1] / lam[0])) if lam[0] > 0 else np.inf
+    if cond > COND_MAX:
+        v = vec[:, 0]
+        top = np.argsort(-np.abs(v))[:3]
+        combo = " ".join(f"{'+' if v[k] >= 0 else '-'} {abs(v[k]):.2f} {names[k]}" for k in top)
+        raise ConfigError(f"unexciting trajectory: the regressor is rank-deficient (column-scaled condition "
+                          f"number {cond:.3g} > {COND_MAX:.0e}); the log does not determine {combo.lstrip('+ ')}")
+
+
+def _lstsq(A, y, w):
+    """Weighted least squares of (N, n, m) A, (N, n) y with per-joint weights w (n,): (x, H^{-1}, scale, cond).
+
+    Normal equations of the column-scaled matrix (its condition number is at most
+    :data:`COND_MAX`, checked before) with one step of iterative refinement; ``H^{-1}`` is of the
+    scaled columns.
+    """
+    Aw = (A * w[None, :, None]).reshape(-1, A.shape[-1])
+    yw = (y * w[None, :]).ravel()
+    scale = np.linalg.norm(Aw, axis=0)
+    scale[scale == 0] = 1.0
+    As = Aw / scale
+    H = As.T @ As
+    Hinv = np.linalg.inv(H)
+    xs = Hinv @ (As.T @ yw)
+    xs = xs + Hinv @ (As.T @ (yw - As @ xs))
+    lam = np.linalg.eigvalsh(H)
+    return xs / scale, Hinv, scale, float(np.sqrt(lam[-1] / max(lam[0], 1e-300)))
+
+
+def weighted_least_squares(A, y, gain: float = 1.0, step: int = 1, iterations: int = 2) -> Fit:
+    """Fit ``y`` (N, n) by ``A`` (N, n, m) (module docstring: weights, noise).
+
+    The covariance is the white-noise one, ``(sigma^2 / D)``-scaled ``H^{-1}``; replace it with
+    :func:`spectral_covariance` when the residual's spectrum is known.
+
+    Parameters
+    ----------
+    A, y : ndarray
+        Filtered regressor rows and torques.
+    gain : float
+        ``G``, the variance of the filter's output for unit white input (1: no filter).
+    step : int
+        ``D``, samples of the log per row.
+    """
+    A = np.asarray(A, dtype=float)
+    y = np.asarray(y, dtype=float)
+    N, n, m = A.shape
+    if N * n <= m:
+        raise ConfigError(f"too few samples: {N} rows x {n} joints for {m} unknowns")
+    dof = N * gain - m / (n * step)
+    if dof <= 0:
+        raise ConfigError(f"too few samples: {N} rows for {m} unknowns after filtering")
+    w = np.ones(n)
+    for _ in range(iterations + 1):
+        x, Hinv, scale, cond = _lstsq(A, y, w)
+        e = y - A @ x
+        sigma = np.sqrt(np.sum(e ** 2, axis=0) / dof)
+        sigma = np.maximum(sigma, 1e-12 * max(1.0, float(np.abs(y).max())))
+        w = 1.0 / sigma
+    x, Hinv, scale, cond = _lstsq(A, y, w)
+    e = y - A @ x
+    sigma = np.sqrt(np.sum(e ** 2, axis=0) / dof)
+    cov = Hinv / np.outer(scale, scale) / step  # white-noise approximation (L ~ I on the band)
+    return Fit(x, 0.5 * (cov + cov.T), sigma, N, cond, w)
+
+
+def spectral_covariance(A, w, rate: float, density) -> np.ndarray:
+    r"""The sandwich covariance of a fit with weights ``w`` (n,) for rows ``A`` (N, n, m) at ``rate`` [Hz].
+
+    ``density(f)`` -> (len(f), n): the rows' noise spectral density *before weighting*, one-sided
+    [unit^2/Hz], filter included (``|L(f)|^2 S_j(f)``). Module docstring: Whittle's formula.
+    """
+    A = np.asarray(A, dtype=float)
+    N, n, m = A.shape
+    Z = A * np.asarray(w, dtype=float)[None, :, None]
+    scale = np.linalg.norm(Z.reshape(-1, m), axis=0)
+    scale[scale == 0] = 1.0
+    Z = Z / scale
+    H = np.einsum("tjk,tjl->kl", Z, Z)
+    M = 2 * N
+    f = np.fft.rfftfreq(M, d=1.0 / rate)
+    dens = np.asarray(density(f), dtype=float) * (rate / 2.0) * np.asarray(w, dtype=float) ** 2  # (len(f), n)
+    weight = np.full(f.size, 2.0)  # rfft: every bin but 0 and Nyquist stands for two
+    weight[0] = 1.0
+    if M % 2 == 0:
+        weight[-1] = 1.0
+    B = np.zeros((m, m))
+    for j in range(n):
+        F = np.fft.rfft(Z[:, j, :], n=M, axis=0)  # (len(f), m)
+        Fw = F * (weight * dens[:, j])[:, None]
+        B += np.real(F.conj().T @ Fw)
+    B /= M
+    Hinv = np.linalg.inv(H)
+    cov = Hinv @ B @ Hinv / np.outer(scale, scale)
+    return 0.5 * (cov + cov.T)
+
+
+def dominating(C1, C2) -> np.ndarray:
+    """The smallest covariance along the common eigendirections of ``C1`` and ``C2`` that is >= both.
+
+    With ``C1 = L L^T`` and ``L^{-1} C2 L^{-T} = U diag(l) U^T``: ``L U diag(max(1, l)) U^T L^T``.
+    Its ellipsoid contains both ellipsoids.
+    """
+    L = np.linalg.cholesky(C1)
+    Li = np.linalg.inv(L)
+    lam, U = np.linalg.eigh(Li @ C2 @ Li.T)
+    C = L @ (U * np.maximum(lam, 1.0)) @ U.T @ L.T
+    return 0.5 * (C + C.T)
+
+
+def ellipsoid(cov_theta, confidence: float, dof: float | None = None) -> dict:
+    r"""The confidence ellipsoid of ``theta`` with covariance ``cov_theta`` (p, p) at ``confidence``.
+
+    The quantile is ``chi2_p(C)`` for a known covariance, or ``p F_{p, nu}(C)`` when the noise
+    level behind it was estimated with ``nu = dof`` degrees of freedom (the Wald statistic with an
+    estimated variance; it tends to ``chi2_p`` as ``nu`` grows).
+
+    Returns
+    -------
+    dict
+        ``P`` (p, p) with ``(theta - theta_0)^T P (theta - theta_0) <= 1``, ``chi2`` (the
+        quantile), ``quantile`` (which), ``dof``, ``rho`` (radius of the smallest ball about
+        theta_0 containing the ellipsoid), ``rho_i`` (p,) (half-widths of the smallest box),
+        ``confidence``.
+    """
+    from scipy.stats import chi2, f
+
+    if not 0.0 < confidence < 1.0:
+        raise ConfigError(f"confidence must be between 0 and 1 (exclusive), got {confidence}")
+    cov_theta = np.asarray(cov_theta, dtype=float)
+    p = cov_theta.shape[0]
+    if dof is None or not np.isfinite(dof):
+        q, which = float(chi2.ppf(confidence, p)), "chi2_p(C)"
+    else:
+        if dof <= 1:
+            raise ConfigError(f"too few effective samples for a confidence region ({dof:.3g} degrees of freedom)")
+        q, which = float(p * f.ppf(confidence, p, dof)), "p F(C; p, nu)"
+    Pinv = q * cov_theta
+    P = np.linalg.inv(Pinv)
+    P = 0.5 * (P + P.T)
+    return {"P": P, "chi2": q, "quantile": which, "dof": None if dof is None else float(dof),
+            "rho": float(np.sqrt(np.linalg.eigvalsh(Pinv)[-1])), "rho_i": np.sqrt(np.diag(Pinv)),
+            "confidence": float(confidence)}
