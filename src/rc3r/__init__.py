@@ -34,12 +34,24 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.controllers._kernels``          compiled kernels of the built-in laws (generic over n, p)
 ``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
 ``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
+``rc3r.controllers.ellipsoid``         law ``robust-ellipsoid``: Spong's term for ||theta - theta_0||_P <= 1
 ``rc3r.trajectory``                    desired trajectories (sines, quintic), compiled evaluation
 ``rc3r.uncertainty``                   parameter uncertainty (re-exports the three below)
 ``rc3r.uncertainty.box``               boxes on standard parameters, box files, perturbed plants
 ``rc3r.uncertainty.bounds``            theta_0 and rho: the paper's method, certified exact ranges
 ``rc3r.uncertainty.payload``           exact bounds for an unknown payload on the last link
 ``rc3r.uncertainty.sampled``           sampled lower bound on max ||theta - theta_0||
+``rc3r.identify``                      identification from logs: bounds for the robust laws (docs/identification.md)
+``rc3r.identify.log``                  logs (CSV, NPZ): loading and validation
+``rc3r.identify.filtering``            resampling, zero-phase (parallel) low-pass, differentiation, cut-off from the data
+``rc3r.identify.regressors``           identification regressor: the arm's Y and per-joint friction columns
+``rc3r.identify.estimate``             weighted least squares, per-joint noise, covariance, confidence ellipsoid
+``rc3r.identify.consistency``          physical consistency: SDP on the pseudo-inertia matrices (cvxpy)
+``rc3r.identify.excitation``           exciting trajectories: Fourier series, condition number minimised
+``rc3r.identify.bounds_file``          ``bounds.toml``: written by identify, read by :func:`load_bounds`
+``rc3r.identify.synthetic``            synthetic logs of a known arm at stated noise levels
+``rc3r.identify.pipeline``             :func:`identify`: log to theta, friction, covariance, validation, bounds
+``rc3r.identify.figures``              held-out torques and residuals of an identification
 ``rc3r.plants``                        the true system: :class:`Plant` = rigid body + effects, loop effects
 ``rc3r.plants.base``                   the plant contract, :class:`Effect`, the effect registry
 ``rc3r.plants.friction``               viscous, smooth Coulomb and offset joint friction (URDF or config)
@@ -75,6 +87,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.cli.run``                       ``run``, ``paper``
 ``rc3r.cli.study``                     ``montecarlo``, ``sweep eps``, ``sweep rate``
 ``rc3r.cli.bench``                     ``bench``
+``rc3r.cli.identify``                  ``identify``, ``excite``
 ``rc3r.cli._output``                   output directories written as a whole, locked
 =====================================  ==============================================================
 

@@ -383,3 +383,6 @@ def inertia_scaled_gain(robot, q, bandwidth: float = 50.0) -> np.ndarray:
     if not (np.isfinite(bandwidth) and bandwidth > 0):
         raise ParameterError(f"bandwidth must be finite and > 0, got {bandwidth}")
     return float(bandwidth) * np.diag(robot.mass_matrix(np.asarray(q, dtype=float)))
+
+
+from . import ellipsoid as _ellipsoid  # noqa: E402,F401  (registers robust-ellipsoid: a Python law)
