@@ -88,6 +88,7 @@ FILES = {
     "bigorigin.urdf": re.sub(r'(<joint name="joint2".*?<origin xyz=")[^"]*"', r'\g<1>1e300 0 0"', URDF, count=1,
                              flags=re.S),
     "bigmass.urdf": re.sub(r'<mass value="[^"]*"', '<mass value="1e300"', URDF, count=1),
+    "edgemass.urdf": re.sub(r'<mass value="[^"]*"', '<mass value="1e12"', URDF, count=1),  # at the bound
     "box_big.toml": "[delta]\nmass = [0, 1e300]\n",
     "params_big.toml": PARAMS.replace("mass = 10.0", "mass = 1e300", 1),
     # parameter files with a key rc3r would ignore
@@ -141,6 +142,7 @@ CASES = [
     ("vm-bigmass", "verify-model --urdf {d}/bigmass.urdf", "beyond 1e+12"),
     ("vm-generic-bigmass", "verify-model --generic --urdf {d}/bigmass.urdf", "magnitude <= 1e+12"),
     ("bd-urdf-bigmass", "bounds --urdf {d}/bigmass.urdf", "beyond 1e+12"),
+    ("bd-urdf-edgemass", "bounds --urdf {d}/edgemass.urdf", "cannot be computed in double precision"),
     ("bd-box-big", "bounds --box {d}/box_big.toml", "beyond 1e+12"),
     ("bd-box-big-json", "bounds --box {d}/box_big.toml --json", "beyond 1e+12"),
     ("run-box-big", "run --perturbed --box {d}/box_big.toml --out {out}", "beyond 1e+12"),
