@@ -327,3 +327,21 @@ def test_atomic_path_never_replaces_what_is_not_a_regular_file(tmp_path):
     atomic_write_text(tmp_path / "t", "new")
     assert (tmp_path / "t").read_text() == "new"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d", "f", "l", "t"]
+
+
+def test_native_stderr_without_a_temporary_file_runs_the_block_as_it_is(monkeypatch, capfd):
+    """No place for the trap's temporary file (a read-only TMPDIR): the URDF is still parsed (the block
+    runs, nothing is caught), instead of an OSError for a user who did nothing wrong."""
+    import tempfile
+
+    from rc3r.io import native_stderr
+
+    def no_tmp(*a, **k):
+        raise OSError(30, "Read-only file system")
+
+    monkeypatch.setattr(tempfile, "TemporaryFile", no_tmp)
+    ran = []
+    with native_stderr() as cpp:
+        ran.append(True)
+        os.write(2, b"shown\n")
+    assert ran == [True] and cpp.text == "" and capfd.readouterr().err == "shown\n"

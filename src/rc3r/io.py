@@ -12,7 +12,6 @@ from URDF, parameter and box files.
 """
 from __future__ import annotations
 
-import errno
 import json
 import math
 import os
@@ -262,29 +261,33 @@ def native_stderr():
     File descriptor 2 is pointed at an anonymous temporary file with ``dup2`` and restored on
     exit, whatever happens in the block (Python's ``sys.stderr`` is flushed first so nothing of it
     is caught by mistake). The redirection is process-wide: a thread writing to fd 2 meanwhile is
-    caught too (rc3r parses URDFs in the main thread). Without a file descriptor 2 (closed), the
-    block runs as it is.
+    caught too (rc3r parses URDFs in the main thread). Without a file descriptor 2 (closed) or a
+    place for the temporary file, the block runs as it is.
     """
     cap = NativeStderr()
     try:
         sys.stderr.flush()
     except (AttributeError, OSError, ValueError):
         pass
+    sink = saved = None
     try:
+        sink = tempfile.TemporaryFile()
         saved = os.dup(2)
-    except OSError as exc:
-        if exc.errno != errno.EBADF:
-            raise
+    except OSError:
+        if sink is not None:
+            sink.close()
+        sink = None
+    if sink is None:
         yield cap
         return
     try:
-        with tempfile.TemporaryFile() as sink:
-            os.dup2(sink.fileno(), 2)
-            try:
-                yield cap
-            finally:
-                os.dup2(saved, 2)
-                sink.seek(0)
-                cap.text = sink.read(1 << 16).decode(errors="replace")
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield cap
+        finally:
+            os.dup2(saved, 2)
+            sink.seek(0)
+            cap.text = sink.read(1 << 16).decode(errors="replace")
     finally:
         os.close(saved)
+        sink.close()
