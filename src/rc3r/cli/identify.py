@@ -115,9 +115,7 @@ def cmd_identify(args) -> int:
     if out.is_dir() and any(out.iterdir()) and not args.force:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     robot = _robot(args)
-    log = load_log(args.log, n=robot.n)
-    _note(f"rc3r identify: {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s of {robot.label} "
-          f"(n = {robot.n}, p = {robot.p}, friction: {', '.join(args.friction) or 'none'}) ...")
+    log = load_log(args.log, n=robot.n)  # no progress line: a refused log must leave one line on stderr
     res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
                    confidence=args.confidence, velocities=args.velocities, consistency=not args.no_consistency,
                    covariance=args.covariance, seed=args.seed)
@@ -137,6 +135,8 @@ def cmd_identify(args) -> int:
         atomic_savefig(torque_figure(res), tmp / "torque.png", dpi=110)
         atomic_savefig(residual_figure(res), tmp / "residuals.png", dpi=110)
     v, f = res.validation, res.filter
+    print(f"identified {robot.p} coefficients + {len(res.friction_kinds) * robot.n} friction terms of "
+          f"{getattr(robot, 'robot_name', robot.name)} from {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s")
     print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}; "
           f"{res.regressor['rows']} rows, condition number {res.regressor['condition_number']:.3g}")
     print(f"held-out rms [N m]: {_fmt(v['rms'])} (logged), {_fmt(v['rms_filtered'])} (low-passed), "

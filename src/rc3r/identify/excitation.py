@@ -34,7 +34,7 @@ from ..errors import ConfigError
 from .regressors import identification_regressor
 
 __all__ = ["HARMONICS", "OBJECTIVE_POINTS", "CONSTRAINT_POINTS", "MAX_VELOCITY", "MAX_ACCELERATION", "LIMIT_MARGIN",
-           "Limits", "limits_of", "regressor_condition", "Excitation", "fourier_trajectory", "excite"]
+           "Limits", "limits_of", "regressor_condition", "Excitation", "fourier_trajectory", "random_fourier", "excite"]
 
 #: Harmonics per joint.
 HARMONICS = 5
@@ -174,6 +174,19 @@ def _feasible_start(rng, n, L, omega, lim: Limits, Bq, Bv, Ba):
     coef[:, 1:] = rng.normal(0.0, 1.0, (n, 2 * L))
     coef = _rest(coef, omega)
     return _shrink(coef, lim, Bq, Bv, Ba, 0.5)
+
+
+def random_fourier(robot, duration: float, seed: int = 0, harmonics: int = HARMONICS, limits: Limits | None = None,
+                   fill: float = 0.5):
+    """A random Fourier trajectory at rest at both ends, within ``fill`` x the limits (the optimiser's start).
+
+    Coefficients from ``numpy.random.default_rng(seed)``; returns an :class:`rc3r.trajectory.Sines`.
+    """
+    lim = limits or limits_of(robot)
+    omega = 2.0 * math.pi / duration
+    B = _basis(np.arange(0.0, duration, 1e-3), omega, int(harmonics))
+    coef = _feasible_start(np.random.default_rng(seed), robot.n, int(harmonics), omega, lim, *B)
+    return fourier_trajectory(_shrink(coef, lim, *B, fill), duration)
 
 
 def _rest(coef, omega):

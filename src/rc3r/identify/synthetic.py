@@ -9,7 +9,7 @@ computed-torque control on its true state:
     M(q)\ddot q + C(q, \dot q)\dot q + g(q) + f_v \dot q + f_c\,\mathrm{sign}(\dot q) = u, \qquad
     u = \mathrm{rnea}\bigl(q, \dot q, \ddot q_d + K_d(\dot q_d - \dot q) + K_p(q_d - q)\bigr),
 
-(``K_p = omega^2``, ``K_d = 2 omega``, ``omega = 10`` rad/s; friction is not compensated),
+(``K_p = omega^2``, ``K_d = 2 omega``, ``omega = 30`` rad/s; friction is not compensated),
 integrated by Pinocchio's ABA and RNEA on ``robot.model`` with fixed-step RK4 (step
 :data:`STEP`), storing ``q, qd, qdd, u`` at every step. The controller sees no noise, so
 the motion does not depend on the sensors: one motion serves many logs, as one
@@ -126,7 +126,7 @@ class Motion:
 
 
 def simulate_motion(robot, trajectory, duration: float, friction: Friction = Friction(),
-                    omega: float = 10.0, step: float = STEP) -> Motion:
+                    omega: float = 30.0, step: float = STEP) -> Motion:
     """Simulate ``robot`` with ``friction`` tracking ``trajectory`` for ``duration`` s (module docstring).
 
     Raises
