@@ -118,3 +118,29 @@ def test_step_underflow_exit_fires_at_its_threshold(perturbed):
     assert res.status == "diverged" and S.STATUS_TEXT[S.HMIN] in res.message
     assert res.t_end == 0.0 and res.steps == 0
     assert res.rejected_steps == 10
+
+
+def test_a_signal_lost_inside_numba_still_stops_the_run(perturbed, monkeypatch):
+    """A SIGINT during numba's compilation raised KeyboardInterrupt inside numba, which lost it: the
+    run went on for its whole duration (seen: a 2000 s run ignoring Ctrl-C sent 6 s after start). The
+    command line's handler also sets status.STOP, which simulate checks after compiling: a warm-up
+    that 'swallows' the interrupt (sets the flag, returns normally) must still end the run."""
+    import signal
+
+    import importlib
+
+    SIM = importlib.import_module("rc3r.simulate")
+    from rc3r import cli
+
+    def swallowing_warm_up(*args):
+        with pytest.raises(KeyboardInterrupt):
+            cli._interrupt(signal.SIGINT, None)  # what the handler does on Ctrl-C
+        # ... and numba's compiler catches the KeyboardInterrupt: nothing propagates
+
+    monkeypatch.setattr(SIM, "_warm_up", swallowing_warm_up)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            simulate(perturbed.plant, perturbed.law, perturbed.trajectory, SimOptions(duration=0.1))
+    finally:
+        S.STOP.clear()
+    assert simulate(perturbed.plant, perturbed.law, perturbed.trajectory, SimOptions(duration=0.01)).ok

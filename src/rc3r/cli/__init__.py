@@ -261,7 +261,6 @@ def build_parser() -> argparse.ArgumentParser:
     be = sub.add_parser("bench", help="closed form vs Pinocchio and simulation timings")
     be.add_argument("--json", action="store_true", help="one JSON object on stdout")
     be.add_argument("--quick", action="store_true", help="tiny sizes (CI: correctness only)")
-    importlib.import_module(".identify", __package__).add_parsers(sub, _positive, _lock)  # identify, excite
     return p
 
 
@@ -275,8 +274,6 @@ _COMMANDS = {
     "montecarlo": ("study", "cmd_montecarlo"),
     "sweep": ("study", "cmd_sweep"),
     "bench": ("bench", "cmd_bench"),
-    "identify": ("identify", "cmd_identify"),
-    "excite": ("identify", "cmd_excite"),
 }
 
 
@@ -285,19 +282,27 @@ def _dispatch(args) -> int:
     return getattr(importlib.import_module(f".{module}", __package__), func)(args)
 
 
-def _sigterm(signum, frame):
-    raise KeyboardInterrupt("SIGTERM")
+def _interrupt(signum, frame):
+    from ..simulate.status import STOP
+
+    STOP.set()  # survives a KeyboardInterrupt lost inside numba's compiler (rc3r.simulate.status)
+    raise KeyboardInterrupt("SIGTERM" if signum == signal.SIGTERM else "SIGINT")
 
 
 def main(argv=None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); return the exit code.
 
-    SIGTERM is handled as Ctrl-C (``KeyboardInterrupt``) while the command runs.
+    SIGTERM is handled as Ctrl-C (``KeyboardInterrupt``) while the command runs; both also set
+    :data:`rc3r.simulate.status.STOP`, which the engines check, so a signal lost inside numba's
+    compiler still ends the run.
     """
     os.environ.setdefault("MPLBACKEND", "Agg")
+    from ..simulate.status import STOP
+
     old = None
+    STOP.clear()
     if threading.current_thread() is threading.main_thread():
-        old = signal.signal(signal.SIGTERM, _sigterm)
+        old = (signal.signal(signal.SIGTERM, _interrupt), signal.signal(signal.SIGINT, _interrupt))
     try:
         args = build_parser().parse_args(argv)
         return int(_dispatch(args) or 0)
@@ -318,7 +323,8 @@ def main(argv=None) -> int:
         return EXIT["internal_error"]
     finally:
         if old is not None:
-            signal.signal(signal.SIGTERM, old)
+            signal.signal(signal.SIGTERM, old[0])
+            signal.signal(signal.SIGINT, old[1])
 
 
 def entry() -> None:  # console script

@@ -364,6 +364,7 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
         from ._python import run
     if engine == "fast":
         _warm_up(run, plant, law, trajectory, options, x0)
+    S.raise_if_stopped()  # a signal during numba's compilation may have been swallowed there
     t0 = time.perf_counter()
     out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
     wall = time.perf_counter() - t0

@@ -70,6 +70,7 @@ class _Loop:
     def rhs(self, t, x):
         if self.budget is not None and self.nrhs >= self.budget:
             raise _Stop(S.WORK, t)
+        S.raise_if_stopped()
         u, zdot, _ = self.control(t, x)
         u = self.plant.applied_torque(x[0:self.n], x[self.n:2 * self.n], u)
         out = np.concatenate([self.plant_rhs(x, u), zdot])
@@ -116,6 +117,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     advance = getattr(plant.rigid, "advance", None)
     for s in range(nsamples + 1):
         t = s * Ts
+        S.raise_if_stopped()
         qm, qdm = loop.measure(x, s, noise) if loop is not None else (None, None)
         ucmd, zdot, yn = ctl.control(t, x, qm, qdm)
         delayed.append(ucmd)

@@ -8,6 +8,7 @@ positive definite, 6 step size underflow, 7 interrupted (SIGINT/SIGTERM; not a d
 from __future__ import annotations
 
 import math
+import threading
 
 from numba import njit
 
@@ -24,6 +25,19 @@ STATUS_TEXT = {
     INTERRUPTED: "interrupted (Ctrl-C or SIGTERM)",
     WORK: "integrator work budget exhausted",
 }
+
+
+#: Set by the command line's SIGINT/SIGTERM handler, cleared when a command starts. A
+#: ``KeyboardInterrupt`` raised while numba compiles or loads a kernel can be lost inside numba;
+#: the flag is not, and the engines check it (:func:`raise_if_stopped`) after compiling and
+#: between chunks, so a signal always ends the run.
+STOP = threading.Event()
+
+
+def raise_if_stopped() -> None:
+    """Raise ``KeyboardInterrupt`` if a stop was requested (:data:`STOP`)."""
+    if STOP.is_set():
+        raise KeyboardInterrupt("stop requested (SIGINT or SIGTERM)")
 
 
 @njit(cache=True, nogil=True)
