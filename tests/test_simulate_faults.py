@@ -142,5 +142,6 @@ def test_a_signal_lost_inside_numba_still_stops_the_run(perturbed, monkeypatch):
         with pytest.raises(KeyboardInterrupt):
             simulate(perturbed.plant, perturbed.law, perturbed.trajectory, SimOptions(duration=0.1))
     finally:
+        monkeypatch.undo()
         S.STOP.clear()
     assert simulate(perturbed.plant, perturbed.law, perturbed.trajectory, SimOptions(duration=0.01)).ok
