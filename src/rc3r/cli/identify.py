@@ -181,7 +181,8 @@ def cmd_excite(args) -> int:
         raise ConfigError(f"--synthetic-log {log_path} must name a .csv or .npz file")
     robot = _robot(args)
     lim = limits_of(robot, args.max_velocity, args.max_acceleration)
-    _note(f"rc3r excite: {args.harmonics} harmonics per joint over {args.duration:g} s for {robot.label}, "
+    _note(f"rc3r excite: {args.harmonics} harmonics per joint over {args.duration:g} s for "
+          f"{getattr(robot, 'robot_name', robot.name)}, "
           f"seed {args.seed} (SLSQP, {args.starts} start(s)) ...")
     ex = excite(robot, args.duration, seed=args.seed, harmonics=args.harmonics, limits=lim, starts=args.starts,
                 check_rate=args.rate)
