@@ -260,3 +260,32 @@ def test_load_bounds_refuses_inconsistent_files(tmp_path, result):
         load_bounds(path, robot=rc3r.load_robot("ur5"))
     with pytest.raises(ConfigError, match="not found"):
         load_bounds(tmp_path / "none.toml")
+
+
+def test_rank_deficient_regressor_names_the_undetermined_combination():
+    """Two columns that move together (here column 2 = 3 x column 1, plus 1e-9 of noise) leave their
+    combination undetermined: the column-scaled condition number (~1e9) exceeds 1e6 and the message
+    names the two columns; a well-excited regressor passes."""
+    from rc3r.identify.estimate import check_excitation
+
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(500, 2, 4))
+    q = np.column_stack([np.linspace(0, 1, 500)] * 2)
+    check_excitation(A, ("a", "b", "c", "d"), q)
+    A[:, :, 1] = 3 * A[:, :, 0] + 1e-9 * rng.normal(size=(500, 2))
+    with pytest.raises(ConfigError, match=r"rank-deficient \(column-scaled condition number .*\b[ab]\b.*\b[ab]\b"):
+        check_excitation(A, ("a", "b", "c", "d"), q)
+
+
+def test_robust_covariance_dominates_both_estimates():
+    """dominating(C1, C2) - C1 and dominating(C1, C2) - C2 are positive semidefinite (to rounding), and it
+    equals C1 when C2 <= C1 (nothing to add)."""
+    from rc3r.identify.estimate import dominating
+
+    rng = np.random.default_rng(1)
+    X, Y = rng.normal(size=(2, 6, 6))
+    C1, C2 = X @ X.T + 0.1 * np.eye(6), Y @ Y.T + 0.1 * np.eye(6)
+    C = dominating(C1, C2)
+    for Ck in (C1, C2):
+        assert np.linalg.eigvalsh(C - Ck)[0] >= -1e-10 * np.abs(C).max()
+    np.testing.assert_allclose(dominating(C1, 0.5 * C1), C1, rtol=1e-10, atol=1e-12)
