@@ -29,7 +29,7 @@ run = S.execute
 """
 _NEW = r"""
 import sys, json, time, numpy as np
-from rc3r.robots.rr3.paper import scenarios
+from rc3r.experiments.paper3r import scenarios
 from rc3r.robots.rr3 import kernels as K
 from rc3r.study import execute as run
 specs = scenarios()

@@ -1,7 +1,7 @@
 """The package layout the robot contract promises, checked on the source (ast), not by convention.
 
-* nothing outside ``rc3r/robots/rr3/`` names the paper's arm in code (the registry names it only
-  in a string); the generic layers see robots through ``rc3r.robots.base.Robot``;
+* nothing outside ``rc3r/robots/rr3/`` and the experiments above the library (``rc3r/experiments/``)
+  names the paper's arm in code (the registry names it only in a string); the generic layers see robots through ``rc3r.robots.base.Robot``;
 * only ``rc3r/cli/`` parses arguments, prints or exits;
 * no module is much over 500 lines;
 * the module map in ``rc3r/__init__.py`` and ``docs/architecture.md`` lists every module.
@@ -18,6 +18,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "rc3r"
 REPO = SRC.parents[1]
 MODULES = sorted(p for p in SRC.rglob("*.py"))
 RR3_DIR = SRC / "robots" / "rr3"
+#: Experiments sit above the library and name their robot openly (docs/architecture.md).
+EXPERIMENTS_DIR = SRC / "experiments"
 
 #: Identifiers that belong to the paper's arm.
 RR3_NAMES = {"RR3", "rr3", "ArmParams", "LinkParams", "table1", "l2", "paper_box", "paper_trajectory"}
@@ -44,7 +46,8 @@ def _identifiers(tree: ast.AST):
             yield node.name
 
 
-@pytest.mark.parametrize("path", [p for p in MODULES if RR3_DIR not in p.parents], ids=_rel)
+@pytest.mark.parametrize("path", [p for p in MODULES if RR3_DIR not in p.parents and EXPERIMENTS_DIR not in p.parents],
+                         ids=_rel)
 def test_generic_modules_do_not_name_the_3r(path):
     names = set(_identifiers(ast.parse(path.read_text())))
     assert not names & RR3_NAMES, f"{_rel(path)} names {sorted(names & RR3_NAMES)}"
@@ -98,3 +101,18 @@ def test_module_map_lists_every_module():
         assert not missing, f"{doc.name} does not list {missing}"
         ghosts = sorted(m for m in listed if m not in dotted and not _is_attribute(m))
         assert not ghosts, f"{doc.name} lists modules that do not exist: {ghosts}"
+
+
+def test_the_library_never_imports_the_experiments():
+    """rc3r.experiments sits above the library: only the command line (and tests) import it, so the
+    robot -> paper -> bench -> robot cycle cannot come back."""
+    bad = []
+    for p in MODULES:
+        if EXPERIMENTS_DIR in p.parents or (SRC / "cli") in p.parents:
+            continue
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and "experiments" in node.module.split("."):
+                bad.append(_rel(p))
+            if isinstance(node, ast.Import) and any("experiments" in a.name.split(".") for a in node.names):
+                bad.append(_rel(p))
+    assert not bad, f"library modules import rc3r.experiments: {bad}"

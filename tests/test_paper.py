@@ -1,4 +1,4 @@
-"""rc3r.robots.rr3.paper and `rc3r run` / `rc3r paper` / `rc3r sweep eps` in-process: outputs, claims, bad input."""
+"""rc3r.experiments.paper3r and `rc3r run` / `rc3r paper` / `rc3r sweep eps` in-process: outputs, claims, bad input."""
 from __future__ import annotations
 
 import json
@@ -6,9 +6,9 @@ import json
 import pytest
 
 from rc3r.cli import main
-from rc3r.robots.rr3.paper import PAPER_SAMPLED_RATE
-from rc3r.robots.rr3.paper import claims as _claims
-from rc3r.robots.rr3.paper import scenarios as paper_scenarios
+from rc3r.experiments.paper3r import PAPER_SAMPLED_RATE
+from rc3r.experiments.paper3r import claims as _claims
+from rc3r.experiments.paper3r import scenarios as paper_scenarios
 from rc3r.study import execute
 
 REQUIRED = ["controller", "plant", "mode", "theta_model", "rho", "eps", "max_abs_error", "rms_error",

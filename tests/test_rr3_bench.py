@@ -18,7 +18,7 @@ import pytest
 
 from rc3r.cli import bench as cli_bench
 from rc3r.robots.rr3 import RR3
-from rc3r.robots.rr3 import bench
+from rc3r.experiments import bench3r as bench
 from rc3r.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
@@ -138,7 +138,7 @@ def test_compare_flags_a_wrong_result():
 
 def test_a_failed_check_makes_the_command_fail(monkeypatch, capsys):
     fake = {"checks_ok": False, "checks": {}}
-    monkeypatch.setattr(RR3, "benchmark", classmethod(lambda cls, quick=False, progress=None: fake))
+    monkeypatch.setattr(bench, "run_bench", lambda quick=False, progress=None: fake)
     monkeypatch.setattr(cli_bench, "render_text", lambda r: "table")
     assert cli_bench.cmd_bench(SimpleNamespace(json=False, quick=True)) == 1
     assert "disagrees with Pinocchio" in capsys.readouterr().err

@@ -23,8 +23,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.rr3.urdf``               URDF writer and reader with the DH structure checks
 ``rc3r.robots.rr3.robot``              :class:`RR3`, the contract's implementation
 ``rc3r.robots.rr3.engine``             the compiled closed-loop simulator
-``rc3r.robots.rr3.paper``              the paper's box, gains, trajectory, scenarios, claims
-``rc3r.robots.rr3.bench``              closed form vs Pinocchio, simulation timings
+``rc3r.robots.rr3.paper``              the paper's box, gains, trajectory, sampled rate (the robot's data)
 ``rc3r.robots.rr3.bench_integrators``  Rosenbrock vs SciPy Radau/BDF on the same compiled loop
 ``rc3r.robots.pinocchio``              :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
@@ -74,6 +73,9 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.campaign.studies``              the campaigns' jobs, summaries, chattering classification
 ``rc3r.campaign.figures``              the campaigns' figures
 ``rc3r.campaign.bench``                campaign throughput with 1 and 2 workers (``rc3r bench``)
+``rc3r.experiments``                   above the library: studies of named robots, benchmarks
+``rc3r.experiments.paper3r``           the paper's section 4 on its 3R: five scenarios, claims (``rc3r paper``)
+``rc3r.experiments.bench3r``           ``rc3r bench``: closed form vs Pinocchio, simulation timings
 ``rc3r.verify``                        checks of a robot against Pinocchio
 ``rc3r.plotting``                      figures (never switches the matplotlib backend)
 ``rc3r.animation``                     the arm tracking its trajectory in 3D (Pinocchio FK), as a GIF

@@ -21,7 +21,7 @@ and the controller's ``theta_0``, ``rho`` and ``rho_i`` are computed from the
 :class:`RunSpec` records what the controller got and where it came from
 (``spec.model``); :func:`execute` copies it into the metrics. The command line
 (:mod:`rc3r.cli`) builds specs with :func:`build_run`; the paper's scenarios are
-:func:`rc3r.robots.rr3.paper.scenarios`.
+:func:`rc3r.experiments.paper3r.scenarios`.
 """
 from __future__ import annotations
 

@@ -177,7 +177,9 @@ def _progress(msg: str) -> None:
 def cmd_bench(args) -> int:
     """``rc3r bench [--json] [--quick]``: print the tables (or one JSON object); 1 if a check fails."""
     quick = bool(getattr(args, "quick", False))
-    r = robot_class(DEFAULT_ROBOT).benchmark(quick=quick, progress=_progress)
+    from ..experiments.bench3r import run_bench
+
+    r = run_bench(quick=quick, progress=_progress)
     from ..robots.pinocchio_bench import bench_generic
 
     r["generic"] = bench_generic(quick=quick, progress=_progress)

@@ -204,7 +204,8 @@ def _table(rows: list[dict]) -> str:
 
 def cmd_paper(args) -> int:
     """``rc3r paper``: the five scenarios, continuous and sampled; figures, summary.md/json."""
-    paper = robot_class(DEFAULT_ROBOT).paper_study()
+    from ..experiments import paper3r as paper  # the paper's experiment, named openly
+
     with output_dir(args.out) as tmp:
         return _paper(paper, tmp)
 

@@ -11,7 +11,7 @@ import time
 
 __all__ = ["bench_generic", "GENERIC_TARGETS"]
 
-#: name -> (limit, comparison, unit, description), as ``rc3r.robots.rr3.bench.TARGETS``.
+#: name -> (limit, comparison, unit, description), as ``rc3r.experiments.bench3r.TARGETS``.
 GENERIC_TARGETS = {
     "ur5_regressor_vs_rnea": (6.0, "<=", "x", "UR5 Slotine-Li Y per state (batch) / one pin.rnea call"),
     "ur5_payload_robust_1khz_10s": (2.0, "<=", "s", "UR5 + payload, robust law, 10 s at 1 kHz: wall time"),

@@ -115,23 +115,6 @@ class RR3(Robot):
         return out
 
     @classmethod
-    def paper_study(cls):
-        """The paper's study of this arm (:mod:`rc3r.robots.rr3.paper`): scenarios and claims."""
-        from . import paper
-
-        return paper
-
-    @classmethod
-    def benchmark(cls, quick: bool = False, progress=None) -> dict:
-        """``rc3r bench``: the closed form against Pinocchio, simulation timings (:mod:`.bench`).
-
-        ``progress(msg)`` receives progress messages (the command line prints them).
-        """
-        from .bench import run_bench
-
-        return run_bench(quick=quick, progress=progress)
-
-    @classmethod
     def default_box(cls):
         """The paper's box (section 4)."""
         from .paper import paper_box

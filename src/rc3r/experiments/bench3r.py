@@ -34,7 +34,7 @@ Correctness (``checks``)
     return 1; a missed *timing* target does not (it is reported).
 
 Simulations (``sims``)
-    :func:`rc3r.robots.rr3.paper.scenarios` in continuous time, FBL-perturbed and
+    :func:`rc3r.experiments.paper3r.scenarios` in continuous time, FBL-perturbed and
     robust-perturbed sampled at 1 kHz (the robust law with the paper's gains
     diverges at 1 kHz; the run stops early, which is reported), and, in the full
     mode only, robust-perturbed for 2 s with the fast and the reference engine
@@ -67,7 +67,7 @@ import time
 import numpy as np
 from numba import njit
 
-from . import kernels as K
+from ..robots.rr3 import kernels as K
 
 __all__ = ["run_bench", "TARGETS"]
 
@@ -140,7 +140,7 @@ def _time(fn, repeats: int) -> tuple[float, float]:
 
 def _compare(x, ref) -> dict:
     """Error measure of :mod:`rc3r.verify`: max |x - ref|, relative to max(1, max |ref|)."""
-    from ...verify import TOL
+    from ..verify import TOL
 
     x = np.asarray(x, float)
     ref = np.asarray(ref, float)
@@ -169,7 +169,7 @@ def _machine() -> dict:
         usable = len(os.sched_getaffinity(0))
     except AttributeError:
         usable = os.cpu_count()
-    from ... import __version__
+    from .. import __version__
 
     return {
         "date_utc": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -197,10 +197,10 @@ def bench_ops(n: int, repeats: int) -> tuple[dict, dict, dict]:
     """Time the closed form and Pinocchio on ``n`` states; return (ops, checks, cpp_estimate)."""
     import pinocchio as pin
 
-    from . import model as mdl
-    from . import regressor as reg
-    from .params import theta as theta_of
-    from .urdf import load_arm
+    from ..robots.rr3 import model as mdl
+    from ..robots.rr3 import regressor as reg
+    from ..robots.rr3.params import theta as theta_of
+    from ..robots.rr3.urdf import load_arm
 
     arm = load_arm(None)
     m, d = arm.model, arm.model.createData()
@@ -338,7 +338,7 @@ def _sim_row(spec, res, walls, execute_s) -> dict:
 
 
 def _run(spec, repeats: int):
-    from ...study import execute
+    from ..study import execute
 
     walls = []
     for _ in range(repeats):
@@ -350,8 +350,8 @@ def _run(spec, repeats: int):
 
 
 def bench_sims(duration: float, repeats: int, reference: bool) -> dict:
-    from ...study import build_run, execute
-    from .paper import scenarios as paper_scenarios
+    from ..study import build_run, execute
+    from .paper3r import scenarios as paper_scenarios
 
     # warm-up: compile or load every integrator/law combination used below
     _progress("warming up the simulator (numba compile or cache load) ...")
@@ -522,7 +522,7 @@ def run_bench(quick: bool = False, progress=None) -> dict:
         out["reference_speedup"] = {"fast_wall_s": f["wall_s"], "reference_wall_s": r["wall_s"],
                                     "speedup": r["wall_s"] / f["wall_s"] if f["wall_s"] > 0 else None}
     out["targets"] = _targets(ops, out["sims"], duration)
-    from .bench_integrators import bench_integrators
+    from ..robots.rr3.bench_integrators import bench_integrators
     out["integrators"] = bench_integrators(duration, progress=_progress)
     skip = {"skipped": "quick mode"}
     out["compile"] = skip if quick else bench_compile()
