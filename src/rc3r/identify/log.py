@@ -195,7 +195,9 @@ def _load_csv(path: Path, data: bytes, n: int | None) -> Log:
         raise ConfigError(f"log {path}: cannot read the rows as numbers")  # pragma: no cover - found above
     if table.size == 0:
         table = np.zeros((0, width))
-    pick = lambda idx: None if idx is None else np.ascontiguousarray(table[:, idx])  # noqa: E731
+    def pick(idx):
+        return None if idx is None else np.ascontiguousarray(table[:, idx])
+
     return _check(str(path), table[:, cols["t"]].copy(), pick(cols["q"]), pick(cols["qd"]), pick(cols["tau"]), n)
 
 
