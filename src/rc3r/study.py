@@ -69,8 +69,8 @@ class RunSpec:
 
 #: Keys a run configuration may hold, per table (docs/control.md).
 CONFIG_KEYS = {
-    "": ("robot", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains", "trajectory",
-         "simulation"),
+    "": ("robot", "urdf", "lock", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains",
+         "trajectory", "simulation", "tolerance"),
     "payload": ("mass", "com"),
     "plant": ("spec", "urdf", "box", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
               "q0_error", "qd0_error", "noise_seed", "engine"),
@@ -123,7 +123,11 @@ def _check_config(cfg: dict, kind_override=None) -> None:
         raise ConfigError(f"config: seed must be an integer in [0, 2^63), got {seed!r}")
     if not isinstance(cfg.get("perturbed", False), bool):
         raise ConfigError(f"config: perturbed must be true or false, got {cfg['perturbed']!r}")
-    for key, where in (("robot", cfg), ("box", cfg), ("spec", cfg.get("plant", {})), ("urdf", cfg.get("plant", {})),
+    lock = cfg.get("lock", {})
+    if not isinstance(lock, dict) or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in lock.values()):
+        raise ConfigError(f"config: lock must be a table of joint = value [rad or m], got {lock!r}")
+    for key, where in (("robot", cfg), ("urdf", cfg), ("box", cfg), ("spec", cfg.get("plant", {})),
+                       ("urdf", cfg.get("plant", {})),
                        ("box", cfg.get("plant", {}))):
         if key in where and not isinstance(where[key], str):
             raise ConfigError(f"config: {key} must be a string, got {where[key]!r}")
@@ -329,7 +333,8 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     cfg = config or {}
     _check_config(cfg, controller)
     seed = int(cfg.get("seed", 0))
-    nominal = _nominal(robot or cfg.get("robot"), urdf, lock)
+    lock = lock if lock is not None else ({k: float(v) for k, v in cfg["lock"].items()} if cfg.get("lock") else None)
+    nominal = _nominal(robot or cfg.get("robot"), urdf if urdf is not None else cfg.get("urdf"), lock)
     ctrl_cfg = dict(cfg.get("controller", {}))
     kind = controller or ctrl_cfg.get("kind", "robust")
     if kind not in LAWS:
@@ -379,12 +384,14 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     scenario = "perturbed" if perturbed else "ideal"
     from .plants import resolve
 
+    if plant_rng is None:  # uncertain plant effects (friction ranges) are drawn with the plant's own seed
+        plant_rng = np.random.default_rng(seed)
     true_plant, loop, _ = resolve(the_plant, plant_cfg, seed=seed, rng=plant_rng, friction=friction,
                                   torque_limit=torque_limit, noise=noise, delay=delay, plant_engine=plant_engine)
     if loop is not None and loop.active and opts.rate is None:
         raise ConfigError("sensor noise, quantization and delay act on a sampled controller: give a rate (--rate HZ)")
     return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings),
-                   true_plant, loop, nominal, tolerance)
+                   true_plant, loop, nominal, tolerance if tolerance is not None else cfg.get("tolerance"))
 
 
 def _nominal(robot: str | None, urdf=None, lock: dict | None = None):
