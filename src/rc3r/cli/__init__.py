@@ -261,6 +261,7 @@ def build_parser() -> argparse.ArgumentParser:
     be = sub.add_parser("bench", help="closed form vs Pinocchio and simulation timings")
     be.add_argument("--json", action="store_true", help="one JSON object on stdout")
     be.add_argument("--quick", action="store_true", help="tiny sizes (CI: correctness only)")
+    importlib.import_module(".identify", __package__).add_parsers(sub, _positive, _lock)  # identify, excite
     return p
 
 
@@ -274,6 +275,8 @@ _COMMANDS = {
     "montecarlo": ("study", "cmd_montecarlo"),
     "sweep": ("study", "cmd_sweep"),
     "bench": ("bench", "cmd_bench"),
+    "identify": ("identify", "cmd_identify"),
+    "excite": ("identify", "cmd_excite"),
 }
 
 
