@@ -69,7 +69,7 @@ class RunSpec:
 
 #: Keys a run configuration may hold, per table (docs/control.md).
 CONFIG_KEYS = {
-    "": ("robot", "urdf", "lock", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains",
+    "": ("robot", "urdf", "lock", "bounds", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains",
          "trajectory", "simulation", "tolerance"),
     "payload": ("mass", "com"),
     "plant": ("spec", "urdf", "box", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
@@ -126,7 +126,7 @@ def _check_config(cfg: dict, kind_override=None) -> None:
     lock = cfg.get("lock", {})
     if not isinstance(lock, dict) or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in lock.values()):
         raise ConfigError(f"config: lock must be a table of joint = value [rad or m], got {lock!r}")
-    for key, where in (("robot", cfg), ("urdf", cfg), ("box", cfg), ("spec", cfg.get("plant", {})),
+    for key, where in (("robot", cfg), ("urdf", cfg), ("bounds", cfg), ("box", cfg), ("spec", cfg.get("plant", {})),
                        ("urdf", cfg.get("plant", {})),
                        ("box", cfg.get("plant", {}))):
         if key in where and not isinstance(where[key], str):
@@ -295,6 +295,24 @@ def _model(law_cls, plant, bounds: _Bounds, perturbed: bool, cfg: dict) -> dict:
     }
 
 
+def _file_model(law_cls, path, nominal) -> dict:
+    """The controller's model from an identification's ``bounds.toml`` (:func:`rc3r.identify.bounds_file.load_bounds`,
+    checked against the nominal robot's n, p and coefficient names)."""
+    from .identify.bounds_file import load_bounds
+
+    bf = load_bounds(path, robot=nominal)
+    inputs = getattr(law_cls, "model_inputs", ())
+    src = f"identified bounds {path} (confidence {bf.get('confidence')})"
+    return {
+        "theta0": _floats(bf["theta0"]), "rho": float(bf["rho"]) if "rho" in inputs else None,
+        "rho_i": _floats(bf["rho_i"]) if "rho_i" in inputs else None,
+        "P": np.asarray(bf["P"]).tolist() if "P" in inputs else None,
+        "theta_source": f"theta_0 of {src}", "rho_source": f"ball containing the ellipsoid of {src}",
+        "rho_i_source": "box containing the ellipsoid" if "rho_i" in inputs else None,
+        "box": None, "nominal": nominal.label, "bounds_file": str(path),
+    }
+
+
 def _law(kind: str, model: dict, cfg: dict, eps_override, table: dict | None = None):
     gains = dict(table or {})  # [gains.<law>] of the config, then [controller] wins
     gains.update({k: v for k, v in cfg.items() if k != "kind"})
@@ -304,6 +322,8 @@ def _law(kind: str, model: dict, cfg: dict, eps_override, table: dict | None = N
     if "eps" in gains and "eps" not in names and "eps_i" in names:  # eq. (7): one eps for every coefficient
         gains.setdefault("eps_i", gains.pop("eps"))
     try:
+        if "P" in names and model.get("P") is not None:
+            gains.setdefault("P", np.asarray(model["P"], dtype=float))
         return make_law(kind, model["theta0"], rho=model["rho"], rho_i=model["rho_i"], **gains)
     except (TypeError, ValueError) as exc:
         if isinstance(exc, ParameterError):
@@ -316,7 +336,8 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
               duration: float | None = None, engine: str | None = None, box: str | None = None,
               payload=None, payload_com=None, config: dict | None = None, name: str | None = None,
               urdf=None, lock: dict | None = None, friction=None, torque_limit=None, noise=None, delay=None,
-              plant_engine: str | None = None, tolerance: float | None = None, plant_rng=None) -> RunSpec:
+              plant_engine: str | None = None, tolerance: float | None = None, plant_rng=None,
+              bounds: str | None = None) -> RunSpec:
     """Resolve a run from keyword options (command line) over a config dict (TOML).
 
     Keyword options win over the config; both over the defaults (the robot's
@@ -329,6 +350,9 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     through Pinocchio unless ``robot`` names a closed-form one). ``friction``, ``torque_limit``,
     ``noise``, ``delay``, ``plant_engine`` and the ``[plant]`` table's effect keys build the true
     plant and its loop (:func:`rc3r.plants.resolve`); ``tolerance`` [rad] is the verdict's.
+    ``bounds`` (or config ``bounds``) is a ``bounds.toml`` of ``rc3r identify``: the controller's
+    theta_0, rho, rho_i and ellipsoid P come from it (:func:`_file_model`); the plant is the nominal
+    robot (or ``plant``).
     """
     cfg = config or {}
     _check_config(cfg, controller)
@@ -347,7 +371,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     model_cfg = dict(cfg.get("model", {}))
     if payload is not None and model_cfg.get("theta") != "plant":
         perturbed = True  # a payload range is unknown to the controller: it gets theta_0 and rho of the range
-    bounds = _Bounds(nominal, box or cfg.get("box") or plant_cfg.get("box"), payload)
+    box_bounds = _Bounds(nominal, box or cfg.get("box") or plant_cfg.get("box"), payload)
     spec = plant or plant_cfg.get("spec", "nominal")
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])
@@ -358,8 +382,14 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
             seed = int(spec.partition(":")[2])  # the seed that actually drew the plant is recorded
         except ValueError:
             pass  # perturb() refuses the spec with its own message
-    the_plant = _plant(nominal, bounds, spec, seed)
-    model = _model(LAWS[kind], the_plant, bounds, perturbed, model_cfg)
+    the_plant = _plant(nominal, box_bounds, spec, seed)
+    bounds_path = bounds if bounds is not None else cfg.get("bounds")
+    if bounds_path is not None:
+        perturbed = model_cfg.get("theta") != "plant"
+        model = _file_model(LAWS[kind], bounds_path, nominal) if perturbed else \
+            _model(LAWS[kind], the_plant, box_bounds, False, model_cfg)
+    else:
+        model = _model(LAWS[kind], the_plant, box_bounds, perturbed, model_cfg)
     law = _law(kind, model, ctrl_cfg, eps, dict(cfg.get("gains", {}).get(kind, {})))
     traj_cfg = dict(cfg.get("trajectory", {}))
     traj = trajectory_from_config(traj_cfg, nominal.default_trajectory())

@@ -51,7 +51,7 @@ def verdict_text(m: dict) -> str:
 def plant_options(args) -> dict:
     """The arm and plant keywords of :func:`rc3r.build_run` from the options of :func:`rc3r.cli.plant_args`."""
     out = {k: getattr(args, k, None) for k in ("urdf", "friction", "torque_limit", "noise", "delay",
-                                               "plant_engine", "tolerance")}
+                                               "plant_engine", "tolerance", "bounds")}
     locks = getattr(args, "lock", None)
     out["lock"] = dict(locks) if locks else None
     return out

@@ -1,0 +1,57 @@
+"""rc3r run --bounds FILE: a bounds.toml of rc3r identify drives the controller (theta_0, rho, rho_i and
+the ellipsoid), on the robust, per-coefficient and ellipsoid laws; a file of another arm is refused."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import rc3r
+from rc3r.cli import main
+from rc3r.identify.bounds_file import load_bounds
+from rc3r.identify.excitation import random_fourier
+from rc3r.identify.log import save_log
+from rc3r.identify.synthetic import SensorNoise, sample_log, simulate_motion
+
+
+@pytest.fixture(scope="module")
+def bounds_file(tmp_path_factory):
+    """Identify the 3R from a 10 s synthetic log (seeded) with the command line: its bounds.toml."""
+    arm = rc3r.load_robot("rr3")
+    log, _ = sample_log(simulate_motion(arm, random_fourier(arm, 10.0, seed=2, fill=0.8), 10.0), seed=0,
+                        noise=SensorNoise())
+    d = tmp_path_factory.mktemp("ident")
+    path = d / "log.npz"
+    save_log(log, path)
+    assert main(["identify", str(path), "--robot", "rr3", "--out", str(d / "id")]) == 0
+    return d / "id" / "bounds.toml"
+
+
+@pytest.mark.parametrize("law", ["robust", "robust-coeff", "robust-ellipsoid"])
+def test_run_takes_the_identified_bounds(bounds_file, law, tmp_path, capsys):
+    """metrics.json's model is the file's theta_0 and (per law) rho, rho_i, P, read back independently
+    with load_bounds; the run tracks the nominal plant."""
+    b = load_bounds(bounds_file)
+    out = tmp_path / law
+    argv = ["run", "--controller", law, "--bounds", str(bounds_file), "--duration", "0.5", "--out", str(out)]
+    if law == "robust-ellipsoid":
+        argv += ["--engine", "python"]
+    assert main(argv) == 0, capsys.readouterr().err
+    m = json.loads((out / "metrics.json").read_text())
+    np.testing.assert_array_equal(m["model"]["theta0"], b["theta0"])
+    assert m["scenario"] == "perturbed" and str(bounds_file) in m["model"]["theta_source"]
+    if law == "robust":
+        assert m["model"]["rho"] == b["rho"]
+    if law == "robust-coeff":
+        np.testing.assert_array_equal(m["model"]["rho_i"], b["rho_i"])
+    if law == "robust-ellipsoid":
+        np.testing.assert_array_equal(np.array(m["model"]["P"]), b["P"])
+    assert m["status"] == "ok" and max(m["max_abs_error"]) < 0.01
+
+
+def test_bounds_of_another_arm_are_refused(bounds_file, tmp_path, capsys):
+    code = main(["run", "--robot", "ur5", "--controller", "robust", "--bounds", str(bounds_file), "--rate", "1000",
+                 "--duration", "0.1", "--out", str(tmp_path / "x")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("rc3r: error:") and err.count("\n") == 1
