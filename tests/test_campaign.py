@@ -40,9 +40,18 @@ def test_plant_seeds_are_fixed_distinct_and_63_bit():
     seeds = [plant_seed(0, k) for k in range(1000)]
     assert len(set(seeds)) == 1000
     assert all(0 <= s < 2 ** 63 for s in seeds)
-    assert plant_seed(0, 7) == plant_seed(0, 7) != plant_seed(1, 7)
-    # a function of (seed, plant) only, by SeedSequence's documented mixing
-    assert plant_seed(0, 0) == int(np.random.SeedSequence([0, 0]).generate_state(1, np.uint64)[0] >> np.uint64(1))
+    # the documented formula, computed another way: SeedSequence([seed, plant])'s first two 32-bit
+    # words, little-endian, as one 64-bit word, shifted right by one bit
+    for seed, plant in [(0, 0), (0, 7), (1, 7), (7, 0), (123456789, 199)]:
+        w = np.random.SeedSequence([seed, plant]).generate_state(2, np.uint32)
+        assert plant_seed(seed, plant) == (int(w[0]) | int(w[1]) << 32) >> 1
+    # the campaign seed and the plant index are not interchangeable, and seeds differ across campaigns
+    assert plant_seed(0, 7) != plant_seed(7, 0)
+    assert not set(seeds) & {plant_seed(1, k) for k in range(1000)}
+    # the same in a fresh interpreter (no state carried between calls or processes)
+    fresh = subprocess.run([sys.executable, "-c", "from rc3r.campaign import plant_seed; print(plant_seed(0, 7))"],
+                           capture_output=True, text=True, check=True, timeout=120).stdout
+    assert int(fresh) == seeds[7]
 
 
 def test_job_ids_are_unique_per_plant_controller_eps_rate_and_tag():
@@ -98,16 +107,50 @@ def test_a_row_is_the_run_of_its_recorded_seed(tmp_path):
     assert m["seed"] == row["plant_seed"]
 
 
+def _p95(x):
+    """numpy's default ('linear') quantile 0.95, computed by the standard library."""
+    import statistics
+
+    return statistics.quantiles(x, n=100, method="inclusive")[94] if len(x) > 1 else x[0]
+
+
 def test_montecarlo_writes_table_summary_and_figures(tmp_path):
+    import statistics
+
+    from matplotlib.image import imread
+
     out = tmp_path / "mc"
     assert main(["montecarlo", *MC, "--out", str(out)]) == 0
     rows = read_rows(out / "runs.csv")
     assert len(rows) == 8 and {r["controller"] for r in rows} == {"fbl", "robust"}
     assert list(rows[0]) == list(columns(3))
-    for name in ("error_cdf.png", "error_vs_distance.png", "summary.json", "summary.md", "timing.csv"):
-        assert (out / name).stat().st_size > 0
     meta = json.loads((out / "campaign.json").read_text())
     assert meta["request"]["seed"] == 0 and meta["radii"]["rho_max"] >= meta["radii"]["rho"]
+    # summary.json: every number recomputed from runs.csv (quantiles by the standard library)
+    summary = json.loads((out / "summary.json").read_text())["summary"]
+    assert set(summary) == {"fbl", "robust"}
+    for c, s in summary.items():
+        rs = [r for r in rows if r["controller"] == c]
+        err = [r["max_error"] for r in rs if r["status"] == "ok"]
+        assert (s["runs"], s["ok"], s["diverged"]) == (4, len(err), 4 - len(err))
+        assert s["max_error_median"] == pytest.approx(statistics.median(err), rel=1e-12)
+        assert s["max_error_p95"] == pytest.approx(_p95(err), rel=1e-12)
+        assert s["max_error_max"] == max(err)
+    checked = [r for r in rows if r["controller"] == "robust"]
+    assert summary["robust"]["inside_ball"] == sum(bool(r["covered"]) for r in checked)
+    assert summary["robust"]["bound_exceeded"] == sum(bool(r["exceeds_bound"]) for r in checked)
+    assert summary["fbl"]["bound_checked"] is None and summary["fbl"]["inside_ball"] is None
+    # summary.md: the same numbers, one table row per controller
+    md = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
+          for line in (out / "summary.md").read_text().splitlines()[2:]}
+    for c, s in summary.items():
+        assert md[c][:5] == [str(s["runs"]), str(s["diverged"]), f"{s['max_error_median']:.3g}",
+                             f"{s['max_error_p95']:.3g}", f"{s['max_error_max']:.3g}"]
+    assert md["robust"][6] == f"{summary['robust']['bound_exceeded']} of {summary['robust']['bound_checked']}"
+    # the figures are PNGs of the size the code asks for (8 x 4.8 in at 100 dpi)
+    for name in ("error_cdf.png", "error_vs_distance.png"):
+        assert imread(out / name).shape[:2] == (480, 800)
+    assert read_rows(out / "timing.csv")[0]["job"] in {r["job"] for r in rows}
     robust = [r for r in rows if r["controller"] == "robust"]
     fbl = {r["plant"]: r for r in rows if r["controller"] == "fbl"}
     # the paper's claim, plant by plant: robust << FBL on every perturbed plant of the box
@@ -118,6 +161,86 @@ def test_montecarlo_writes_table_summary_and_figures(tmp_path):
     spec = build_run(controller="robust", perturbed=True, plant=f"random:{robust[0]['plant_seed']}")
     th0 = np.array(spec.model["theta0"])
     assert robust[0]["theta_dist"] == pytest.approx(np.linalg.norm(spec.plant.theta - th0), rel=1e-12)
+
+
+def test_cdf_figure_plots_the_rows():
+    """error_distribution's curve per controller: x = the sorted max errors, y = k / (runs)."""
+    from rc3r.campaign.figures import error_distribution
+
+    rows = [{"controller": "a", "status": "ok", "max_error": e} for e in (3e-3, 1e-3, 2e-3)]
+    rows.append({"controller": "a", "status": "diverged", "max_error": 1.0})
+    (line,) = error_distribution(rows, "t").axes[0].get_lines()
+    np.testing.assert_array_equal(line.get_xdata(), [1e-3, 2e-3, 3e-3])
+    np.testing.assert_array_equal(line.get_ydata(), [0.25, 0.5, 0.75])  # the diverged run counts in N
+    assert line.get_label() == "a (3 runs, 1 diverged)"
+
+
+def test_exceeds_bound_is_max_error_above_the_predicted_bound(tmp_path):
+    """The columns behind docs/robustness.md's "0 of N": exceeds_bound recomputed from each row,
+    and the summary's count from the rows. The paper's Lambda is the same on every joint, so
+    the per-joint bound is one number (checked) and any(e_j > bound_j) = max_error > predicted_bound."""
+    from rc3r.study import build_run
+
+    law = build_run(controller="robust", perturbed=True).law
+    b = error_bound(law, 1.0, 2.0, 3)
+    assert np.all(b == b[0])
+    out = tmp_path / "mc"
+    assert main(["montecarlo", "--n", "3", "--duration", "0.5", "--controllers", "robust", "--workers", "1",
+                 "--out", str(out)]) == 0
+    rows = read_rows(out / "runs.csv")
+    assert all(r["covered"] is True and r["predicted_bound"] > 0 for r in rows)
+    for r in rows:
+        assert r["exceeds_bound"] is (r["max_error"] > r["predicted_bound"])
+    s = json.loads((out / "summary.json").read_text())["summary"]["robust"]
+    assert s["bound_checked"] == 3 and s["bound_exceeded"] == sum(r["max_error"] > r["predicted_bound"] for r in rows)
+
+
+def test_a_run_above_a_tiny_predicted_bound_is_counted(tmp_path, monkeypatch):
+    """A bound forced 1e6 times smaller than the guarantee's: every run exceeds it, the rows say so
+    and the summary counts them (a flipped comparison would report 0 of 3)."""
+    import rc3r.controllers.guarantee as guarantee
+
+    real = guarantee.error_bound
+    monkeypatch.setattr(guarantee, "error_bound", lambda *a, **k: real(*a, **k) * 1e-6)
+    out = tmp_path / "mc"
+    assert main(["montecarlo", "--n", "3", "--duration", "0.5", "--controllers", "robust", "--workers", "1",
+                 "--out", str(out)]) == 0
+    rows = read_rows(out / "runs.csv")
+    assert all(r["max_error"] > r["predicted_bound"] and r["exceeds_bound"] is True for r in rows)
+    s = json.loads((out / "summary.json").read_text())["summary"]["robust"]
+    assert (s["bound_checked"], s["bound_exceeded"]) == (3, 3)
+    assert "| 3 of 3 |" in (out / "summary.md").read_text()
+
+
+def test_montecarlo_rows_record_the_configs_sampled_rate(tmp_path):
+    """A config with [simulation] rate = 1000 and no --rate: the runs are sampled at 1 kHz and
+    every row and job id says so (they said 'continuous' with an empty rate)."""
+    from rc3r.study import build_run, execute
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[simulation]\nrate = 1000\n")
+    out = tmp_path / "mc"
+    assert main(["montecarlo", "--n", "2", "--duration", "0.3", "--controllers", "fbl,robust", "--workers", "1",
+                 "--config", str(cfg), "--out", str(out)]) == 0
+    rows = read_rows(out / "runs.csv")
+    assert len(rows) == 4
+    assert all(r["rate_hz"] == 1000.0 and r["job"].endswith("/rate=1000.0") for r in rows)
+    # the row is the run at 1 kHz: same max error as that run built independently
+    r = rows[0]
+    res, m = execute(build_run(controller=r["controller"], perturbed=True, plant=f"random:{r['plant_seed']}",
+                               rate=1000.0, duration=0.3))
+    assert res.mode == "sampled" and r["e_max_1"] == m["max_abs_error"][0]
+    # a config rate that is not a number is refused before any run
+    cfg.write_text("[simulation]\nrate = 'fast'\n")
+    assert main(["montecarlo", "--n", "1", "--duration", "0.3", "--config", str(cfg),
+                 "--out", str(tmp_path / "bad")]) == 2
+    assert not (tmp_path / "bad").exists()
+
+
+def test_a_continuous_job_runs_in_continuous_time_whatever_the_config_says():
+    job = Job(-1, "nominal", "robust", 0.5, None, 0.2, config=json.dumps({"simulation": {"rate": 1000}}))
+    assert job.id.endswith("/continuous") and job.build().options.rate is None
+    assert Job(-1, "nominal", "robust", 0.5, 2000.0, 0.2, config=job.config).build().options.rate == 2000.0
 
 
 def test_local_workers_and_one_process_give_the_same_table(tmp_path):
@@ -317,6 +440,43 @@ def test_sweep_rate_finds_the_boundary_on_the_paper_arm(tmp_path):
     st = json.loads((out / "stability.json").read_text())["maps"]["default"]
     assert st["cells"] == [["diverged", "clean"]] and st["safe_rate"] == {"0.5": 100000.0}
     assert (out / "stability_map.png").stat().st_size > 0
+
+
+def test_rate_map_takes_a_per_joint_K():
+    """K = [...] in the config (one gain per joint) is a key of the map (it was unhashable)."""
+    cfg = json.dumps({"gains": {"robust": {"K": [100.0, 80.0, 60.0]}}})
+    jobs = [Job(-1, "nominal", "robust", 0.5, r, config=cfg) for r in (None, 1e3, 1e5)]
+    rows = [{"job": jobs[0].id, "status": "ok", "chattering": 10.0},
+            {"job": jobs[1].id, "status": "diverged", "chattering": 1e9},
+            {"job": jobs[2].id, "status": "ok", "chattering": 20.0}]
+    maps = rate_map(rows, jobs)
+    assert list(maps) == [(100.0, 80.0, 60.0)]
+    assert maps[(100.0, 80.0, 60.0)]["cells"] == [["diverged", "clean"]]
+    from rc3r.campaign.studies import gain_label
+
+    assert [gain_label(k) for k in (None, "default", 50.0, (150.9369, 191.732, 0.8568))] == \
+        ["default", "default", "50", "[151, 192, 0.857]"]
+
+
+def test_sweep_rate_with_a_per_joint_K_in_the_config_writes_its_map(tmp_path, capsys):
+    """The command of the bug report on the 3R (per-joint K from the config, a config rate of 1 kHz):
+    exit 0, the map keyed by the gains, and its 'continuous' reference really continuous."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[gains.robust]\nK = [100.0, 80.0, 60.0]\n[simulation]\nrate = 1000\n")
+    out = tmp_path / "sr"
+    args = ["sweep", "rate", "--config", str(cfg), "--eps", "0.5", "--rates", "1000", "100000", "--duration", "0.3",
+            "--workers", "1", "--out", str(out)]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    assert "K = [100, 80, 60]: eps = 0.5: clean from" in printed
+    st = json.loads((out / "stability.json").read_text())["maps"]
+    assert list(st) == ["[100.0, 80.0, 60.0]"] and st["[100.0, 80.0, 60.0]"]["K"] == [100.0, 80.0, 60.0]
+    rows = {r["job"]: r for r in read_rows(out / "runs.csv")}
+    ref = rows["nominal/robust/eps=0.5/continuous"]
+    assert ref["rate_hz"] is None and ref["chattering"] != rows["nominal/robust/eps=0.5/rate=1000.0"]["chattering"]
+    # resumed, the finished campaign writes the same map again
+    assert main(args + ["--resume"]) == 0
+    assert json.loads((out / "stability.json").read_text())["maps"] == st
 
 
 # --- the guarantee --------------------------------------------------------------------------------

@@ -24,6 +24,15 @@ class ConfigError(Rc3rError, ValueError):
     """A configuration (TOML) file or command-line option that cannot be used."""
 
 
+class WorkerLostError(Rc3rError):
+    """A campaign lost its workers: a local pool process was killed (out of memory, ``kill``),
+    or a Dask cluster has had no workers for longer than the grace period. An environment
+    fault, not a bug: the finished rows are kept and ``--resume`` runs the rest
+    (exit code 75, ``EX_TEMPFAIL`` of sysexits.h: try again)."""
+
+    exit_code = 75
+
+
 class DivergenceError(Rc3rError):
     """A simulation that left its state/torque bounds; raised only on request."""
 

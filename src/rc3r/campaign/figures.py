@@ -5,7 +5,7 @@
   law's ``rho`` and the certified ``rho_max`` marked, and the robust law's predicted bound.
 * :func:`pareto` -- eps sweep: final error against chattering, one curve per rate.
 * :func:`stability_map` -- rate sweep: eps x rate cells (clean / chattering / diverged)
-  with the safe-rate boundary drawn, one panel per K.
+  with the safe-rate boundary drawn, one panel per K (a per-joint K titled by its entries).
 """
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ import numpy as np
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
+
+from .studies import gain_label
 
 __all__ = ["error_distribution", "error_vs_distance", "pareto", "stability_map"]
 
@@ -108,7 +110,7 @@ def stability_map(maps: dict, title: str) -> Figure:
             xs += [x, x]
             ys += [i - 0.5, i + 0.5]
         ax.plot(xs, ys, color="k", lw=2)
-        ax.set_title(f"K = {k}" if k != "default" else "K = default")
+        ax.set_title(f"K = {gain_label(k)}", fontsize=9)
     handles = [Patch(color=c, label=n) for n, c in zip(_CLASSES[:3], _COLOURS[:3])]
     handles.append(Patch(facecolor="none", edgecolor="k", label="safe-rate boundary (clean to its right)"))
     fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8)

@@ -38,7 +38,8 @@ class Job:
     eps : float or None
         Boundary layer of the robust laws (None: the config's or the law's default).
     rate : float or None
-        Controller rate [Hz]; None = continuous time.
+        Controller rate [Hz]; None = continuous time (also when the config has a
+        ``[simulation] rate``: a job is exactly what its :attr:`id` says).
     duration : float or None
         Simulated time [s] (None: config, else 10).
     robot, box : str or None
@@ -69,11 +70,12 @@ class Job:
         return f"{who}/{self.controller}/{eps}/{rate}" + (f"/{self.tag}" if self.tag else "")
 
     def build(self):
-        """The :class:`rc3r.study.RunSpec` of this job."""
+        """The :class:`rc3r.study.RunSpec` of this job (``rate`` None runs in continuous time)."""
         from ..study import build_run
 
         return build_run(robot=self.robot, controller=self.controller, perturbed=True, plant=self.spec,
-                         eps=self.eps, rate=self.rate, duration=self.duration, box=self.box,
+                         eps=self.eps, rate=0.0 if self.rate is None else self.rate,  # 0: continuous
+                         duration=self.duration, box=self.box,
                          config=json.loads(self.config), name=self.id)
 
 
@@ -128,7 +130,8 @@ def run_job(job: Job) -> tuple[dict, dict]:
     eps = job.eps if job.eps is not None else (float(law_eps) if isinstance(law_eps, (int, float)) else None)
     row = {
         "job": job.id, "plant": job.plant, "plant_seed": spec.seed if job.spec.startswith("random:") else None,
-        "controller": job.controller, "eps": eps, "rate_hz": job.rate,
+        "controller": job.controller, "eps": eps,
+        "rate_hz": None if spec.options.rate is None else float(spec.options.rate),  # as simulated
         "theta_dist": float(np.linalg.norm(spec.plant.theta - th0)), "rho": spec.model.get("rho"),
         "covered": covered, "status": res.status, "t_end": res.t_end,
         "max_error": float(e_max.max()), "final_error": float(np.max(m["final_error_bound"])),

@@ -4,7 +4,8 @@ Each is a list of :class:`~rc3r.campaign.jobs.Job` (built here) run by
 :func:`~rc3r.campaign.runner.run_many`, and a summary of the finished rows.
 
 * :func:`montecarlo_jobs` -- N plants drawn uniformly from the simulable part of the
-  box (plant k from ``random:<plant_seed(seed, k)>``), every controller on every plant;
+  box (plant k from ``random:<plant_seed(seed, k)>``), every controller on every plant,
+  at ``--rate`` or else the config's ``[simulation] rate`` (its jobs and rows say which);
   :func:`montecarlo_summary` per controller: counts, quantiles of the max error, the
   fraction of plants inside the law's ball and how often a robust law's error exceeded
   its predicted bound (:mod:`rc3r.controllers.guarantee`).
@@ -12,7 +13,8 @@ Each is a list of :class:`~rc3r.campaign.jobs.Job` (built here) run by
   given rates: final error bound against chattering.
 * :func:`rate_jobs` / :func:`rate_map` -- the robust law over eps x rate x K, sampled
   over the full duration, each cell classified (:func:`classify`) against the
-  continuous-time run of the same eps and K:
+  continuous-time run of the same eps and K (a scalar K, a per-joint K as a tuple,
+  or the config's/law's default; :func:`gain_label` names it):
 
   - ``diverged`` -- the run left its bounds (:mod:`rc3r.simulate.status`);
   - ``chattering`` -- it finished, but the torque's total variation per second is more
@@ -23,13 +25,15 @@ Each is a list of :class:`~rc3r.campaign.jobs.Job` (built here) run by
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 
+from ..errors import ConfigError
 from .jobs import Job, plant_seed
 
 __all__ = ["montecarlo_jobs", "montecarlo_summary", "eps_jobs", "eps_summary", "rate_jobs", "rate_map",
-           "classify", "CHATTER_RATIO", "model_radii"]
+           "classify", "CHATTER_RATIO", "model_radii", "config_rate", "gain_label"]
 
 #: A sampled run chatters when its total variation of u per second exceeds this multiple
 #: of the continuous-time run's (docs/robustness.md).
@@ -40,12 +44,32 @@ def _cfg(config) -> str:
     return json.dumps(config or {}, sort_keys=True)
 
 
+def config_rate(config) -> float | None:
+    """The controller rate [Hz] of a config's ``[simulation] rate`` (None: absent or 0, continuous time).
+
+    Raises
+    ------
+    rc3r.errors.ConfigError
+        If the rate is not a non-negative finite number.
+    """
+    sim = (config or {}).get("simulation", {})
+    rate = sim.get("rate") if isinstance(sim, dict) else None
+    if rate is None:
+        return None
+    if isinstance(rate, bool) or not isinstance(rate, (int, float)) or not math.isfinite(rate) or rate < 0:
+        raise ConfigError(f"[simulation] rate = {rate!r}: must be a rate in Hz (> 0), or 0 for continuous time")
+    return float(rate) or None
+
+
 def montecarlo_jobs(n: int, seed: int, controllers, *, eps=None, rate=None, duration=None, robot=None,
                     box=None, config=None) -> list[Job]:
     """Every controller on plants 0..n-1 of the box (plant k: ``random:<plant_seed(seed, k)>``);
-    ``eps`` goes to the laws that have one (robust, robust-coeff)."""
+    ``eps`` goes to the laws that have one (robust, robust-coeff). ``rate`` None takes the
+    config's ``[simulation] rate`` (:func:`config_rate`), so each job names the rate it runs at."""
     from ..controllers import LAWS
 
+    cfg_rate = config_rate(config)
+    rate = cfg_rate if rate is None else float(rate)
     cfg = _cfg(config)
     has_eps = {c: any(f in LAWS[c].__dataclass_fields__ for f in ("eps", "eps_i")) for c in controllers}
     return [Job(k, f"random:{plant_seed(seed, k)}", c, eps if has_eps[c] else None, rate, duration, robot, box, cfg)
@@ -97,7 +121,9 @@ def montecarlo_summary(rows: list[dict]) -> dict:
 def eps_jobs(eps_values, rates=(None,), *, n_plants: int = 0, seed: int = 0, duration=None, robot=None,
              box=None, config=None, controller: str = "robust", tag: str = "") -> list[Job]:
     """The robust law over ``eps_values`` at each rate (None = continuous), on the nominal plant
-    (the paper's perturbed scenario) or on ``n_plants`` plants of the box."""
+    (the paper's perturbed scenario) or on ``n_plants`` plants of the box. A config's
+    ``[simulation] rate`` is checked but not used: these rates are the sweep's."""
+    config_rate(config)
     cfg = _cfg(config)
     plants = [(-1, "nominal")] if n_plants == 0 else [(k, f"random:{plant_seed(seed, k)}") for k in range(n_plants)]
     return [Job(k, spec, controller, float(e), r, duration, robot, box, cfg, tag)
@@ -144,13 +170,27 @@ def classify(row: dict, reference: dict | None) -> str:
 
 
 def _gain(job: Job):
-    return json.loads(job.config).get("gains", {}).get("robust", {}).get("K")
+    """The robust law's K of a job's config: None, a float, or a per-joint tuple of floats (hashable)."""
+    k = json.loads(job.config).get("gains", {}).get("robust", {}).get("K")
+    if isinstance(k, (list, tuple)):
+        return tuple(float(x) for x in k)
+    return None if k is None else float(k)
+
+
+def gain_label(k) -> str:
+    """Short text of a rate map's key: ``default``, ``50`` or ``[151, 192, 41.9]`` (3 digits)."""
+    if k is None or k == "default":
+        return "default"
+    if isinstance(k, (list, tuple)):
+        return "[" + ", ".join(f"{x:.3g}" for x in k) + "]"
+    return f"{k:g}"
 
 
 def rate_map(rows: list[dict], jobs: list[Job]) -> dict:
     """``{K: {"eps": [...], "rates": [...], "cells": [[class per rate] per eps], "safe_rate": {eps: Hz}}}``.
 
-    A cell is the worst class over the plants (diverged > chattering > clean);
+    K is ``"default"`` (the law's), a float, or a tuple of floats (a per-joint K, from
+    the config's ``[gains.robust] K = [...]``). A cell is the worst class over the plants (diverged > chattering > clean);
     ``safe_rate[eps]`` is the lowest rate from which every higher rate is clean (None if none is).
     """
     by_id = {r["job"]: r for r in rows}

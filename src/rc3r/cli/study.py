@@ -5,6 +5,10 @@ job, the metrics of ``rc3r run``), ``timing.csv`` (wall times, workers), ``campa
 (what was asked, seeds, bounds, provenance), and at the end the summary and the figures
 (each written atomically). An interrupted campaign keeps every finished row; the same
 command with ``--resume`` runs only the rest. A lock refuses a second writer.
+
+A campaign whose workers die (a local worker killed, a Dask cluster without workers for
+``RC3R_DASK_GRACE`` seconds, default 60) stops with one line and exit code 75
+(:class:`rc3r.errors.WorkerLostError`); its rows stay, and ``--resume`` continues.
 """
 from __future__ import annotations
 
@@ -17,7 +21,9 @@ from pathlib import Path
 from ..campaign import (RunTable, columns, eps_jobs, eps_summary, model_radii, montecarlo_jobs,
                         montecarlo_summary, rate_jobs, rate_map, read_rows, run_many, sorted_rows)
 from ..campaign.jobs import TIMING_KEYS
-from ..errors import ConfigError
+from ..campaign.runner import DASK_GRACE_S
+from ..campaign.studies import gain_label
+from ..errors import ConfigError, WorkerLostError
 from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..provenance import provenance
 from . import EXIT
@@ -32,6 +38,20 @@ def _progress_bar(total: int, done: int, what: str):
                 disable=None, mininterval=0.5)
 
 
+def _dask_grace() -> float:
+    """Seconds a Dask cluster may have no worker while runs wait: ``RC3R_DASK_GRACE``, else the default."""
+    text = os.environ.get("RC3R_DASK_GRACE", "").strip()
+    if not text:
+        return DASK_GRACE_S
+    try:
+        grace = float(text)
+    except ValueError:
+        grace = float("nan")
+    if not grace > 0 or grace == float("inf"):
+        raise ConfigError(f"RC3R_DASK_GRACE={text!r}: must be a number of seconds > 0")
+    return grace
+
+
 def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
     """Shared driver: check --out, lock, campaign.json, run the jobs, then ``finish(out, rows, meta)``."""
     out = check_output_path(args.out)
@@ -39,6 +59,7 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
         raise ConfigError("nothing to run: the campaign has no jobs")
     if args.scheduler is not None and args.workers is not None:
         raise ConfigError("give --workers or --scheduler, not both")
+    grace = _dask_grace()
     first = jobs[0].build()  # bad input (box, robot, gains, config) refused here, before any worker starts
     n = first.plant.n
     with locked(out):
@@ -65,13 +86,20 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
                 RunTable(out / "timing.csv", TIMING_KEYS).open(resume=True) as timing:
             done = sum(1 for j in jobs if j.id in table.done)
             where = args.scheduler or f"{args.workers or os.cpu_count()} local worker(s)"
+            if table.dropped:
+                print(f"rc3r {kind}: {table.dropped} incomplete row(s) of {out}/runs.csv dropped; they run again",
+                      file=sys.stderr)
             print(f"rc3r {kind}: {len(jobs)} runs, {done} already done, on {where} -> {out}/", file=sys.stderr)
             announce_compile(first.plant)
             bar = _progress_bar(len(jobs), done, kind)
             t0 = time.perf_counter()
             try:
                 written = run_many(jobs, table, timing, workers=args.workers, scheduler=args.scheduler,
-                                   progress=lambda row: bar.update(1))
+                                   progress=lambda row: bar.update(1), worker_grace=grace)
+            except WorkerLostError as exc:
+                bar.close()
+                raise WorkerLostError(f"{exc}; {len(table.done)} of {len(jobs)} runs are in {out}/runs.csv; the same "
+                                      "command with --resume runs the rest") from None
             except KeyboardInterrupt:
                 bar.close()
                 print(f"rc3r: interrupted; {len(table.done)} of {len(jobs)} runs are in {out}/runs.csv; the same "
@@ -83,6 +111,11 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
         print(f"{written} runs in {wall:.1f} s ({60 * written / max(wall, 1e-9):.0f} runs/min); "
               f"{len(rows)} of {len(jobs)} in the table", file=sys.stderr)
         return finish(out, rows, meta)
+
+
+def _map_key(k) -> str:
+    """Key of a rate map in stability.json: ``default``, ``50.0``, or a per-joint K as a JSON list."""
+    return json.dumps(list(k)) if isinstance(k, tuple) else str(k)
 
 
 def _g(x) -> str:
@@ -158,7 +191,8 @@ def cmd_sweep(args) -> int:
         else:
             maps = rate_map(rows, jobs)
             atomic_write_json(out / "stability.json", {
-                "maps": {str(k): {**m, "safe_rate": {str(e): r for e, r in m["safe_rate"].items()}}
+                "maps": {_map_key(k): {"K": list(k) if isinstance(k, tuple) else None if k == "default" else k,
+                                       **m, "safe_rate": {str(e): r for e, r in m["safe_rate"].items()}}
                          for k, m in maps.items()},
                 "request": meta["request"], "provenance": provenance()})
             atomic_savefig(stability_map(maps, "sampled-data robust law over the full duration"),
@@ -166,7 +200,7 @@ def cmd_sweep(args) -> int:
             for k, m in maps.items():
                 for e in m["eps"]:
                     s = m["safe_rate"][e]
-                    print(f"K = {k}: eps = {e:g}: clean from {'never' if s is None else f'{s:g} Hz'}")
+                    print(f"K = {gain_label(k)}: eps = {e:g}: clean from {'never' if s is None else f'{s:g} Hz'}")
         return EXIT["ok"]
 
     return _campaign(args, f"sweep-{args.what}", jobs, request, finish)
