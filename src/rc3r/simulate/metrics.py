@@ -44,7 +44,7 @@ def _layer(res, eps):
 def _verdict(res, tolerance) -> dict:
     from .verdict import TOLERANCE, verdict
 
-    effects = {e.get("effect"): e for e in res.robot.get("effects", [])}
+    effects = {e.get("effect"): e for e in getattr(res, "robot", {}).get("effects", [])}
     limits = None
     if "limits" in effects:
         from ..plants.limits import JointLimits, crossings
@@ -101,8 +101,8 @@ def run_metrics(res, seed=None, tolerance=None) -> dict:
         "steps": res.steps,
         "tolerances": {"rtol": res.options.rtol, "atol": res.options.atol} if res.mode == "continuous" else None,
         "seed": seed,
-        "effects": res.robot.get("effects", []),
-        "loop": res.loop,
+        "effects": getattr(res, "robot", {}).get("effects", []),
+        "loop": getattr(res, "loop", None),
     }
     out.update(_verdict(res, tolerance))
     return out
