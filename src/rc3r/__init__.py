@@ -22,9 +22,10 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.rr3.regressor``          closed-form Slotine--Li and inverse-dynamics regressors
 ``rc3r.robots.rr3.urdf``               URDF writer and reader with the DH structure checks
 ``rc3r.robots.rr3.robot``              :class:`RR3`, the contract's implementation
-``rc3r.robots.rr3.engine``             the compiled closed-loop simulator
+``rc3r.robots.rr3.engine``             the 3R's kernel supply of the compiled engine
 ``rc3r.robots.rr3.paper``              the paper's box, gains, trajectory, sampled rate (the robot's data)
 ``rc3r.robots.rr3.bench_integrators``  Rosenbrock vs SciPy Radau/BDF on the same compiled loop
+``rc3r.robots.rr3.c_kernels``          the closed-form Slotine--Li regressor as C99 source (``rc3r export``)
 ``rc3r.robots.pinocchio``              :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
@@ -60,13 +61,21 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.plants._kernels``               the compiled effects (fields every compiled engine applies)
 ``rc3r.plants.mujoco``                 MuJoCo as the plant's rigid body (optional extra)
 ``rc3r.simulate``                      :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
-``rc3r.simulate._fast``                the ``fast`` engine (a robot's compiled simulator)
+``rc3r.simulate._fast``                the compiled engine's driver: one instantiation per kernel supply
+``rc3r.simulate.engines``              engines: the contract and registry, the compiled integrators
+``rc3r.simulate.engines.base``         the engine contract, the registry (``ENGINES``), the built-in engines
+``rc3r.simulate.engines.compiled``     Rosenbrock and ZOH RK4 integrators for any n, p (a numba template)
+``rc3r.simulate.engines._template``    the kernel supply contract, as stubs
 ``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)
 ``rc3r.simulate.metrics``              scalar metrics of a run
 ``rc3r.simulate.verdict``              what a run means: clean, chattering, saturated, limit-violated, diverged
 ``rc3r.simulate.status``               status codes and the compiled bound check
 ``rc3r.simulate.export``               a result as a table, CSV, figure, run directory
 ``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
+``rc3r.export``                        ``rc3r export``: a run's controller as self-contained C99, with a checking harness
+``rc3r.export.c``                      the C controller: trajectory, law, state, zero-order hold, delay line
+``rc3r.export.chain``                  a serial chain's Slotine--Li regressor in C (port of the compiled kernel)
+``rc3r.export.harness``                recorded states, rc3r's torques, ``check.c`` and the ``Makefile``
 ``rc3r.campaign``                      many runs: Monte Carlo over the box, eps sweep, rate map
 ``rc3r.campaign.jobs``                 :class:`Job` (one run, picklable) and :func:`run_job` (its row)
 ``rc3r.campaign.runner``               resumable row-by-row table, local process pool or Dask
@@ -89,6 +98,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.cli.run``                       ``run``, ``paper``
 ``rc3r.cli.study``                     ``montecarlo``, ``sweep eps``, ``sweep rate``
 ``rc3r.cli.bench``                     ``bench``
+``rc3r.cli.export``                    ``export``
 ``rc3r.cli.identify``                  ``identify``, ``excite``
 ``rc3r.cli._output``                   output directories written as a whole, locked
 =====================================  ==============================================================

@@ -304,6 +304,8 @@ class PinocchioRobot(Robot):
     #: theta is linear in the standard parameters (first moments, inertia about the joint frame),
     #: so exact ranges over a box follow from interval arithmetic (:mod:`rc3r.uncertainty.bounds`).
     linear_in_standard_parameters = True
+    compiled_kernels = property(lambda self: None if self.kernel is None else self.kernel.supply(self))
+    fast_engine = property(lambda self: None if self.kernel is None else self.kernel.engine)  # ChainKernel
 
     # ---- sizes and parameters ---------------------------------------------------------
     @property

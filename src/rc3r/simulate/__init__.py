@@ -45,11 +45,14 @@ import numpy as np
 
 from ..errors import DivergenceError, ParameterError
 from . import status as S
+from .engines.base import engine_names as _engine_names
 
 __all__ = ["SimOptions", "SimResult", "simulate", "ENGINES"]
 
-#: Engines accepted by :class:`SimOptions`.
-ENGINES = ("auto", "fast", "python", "reference")
+#: Engines accepted by :class:`SimOptions`: ``"auto"`` and every name and alias of the engine registry
+#: (:mod:`rc3r.simulate.engines`; a live view: ``"auto", "fast", "compiled", "python", "reference"`` and
+#: any engine registered later).
+ENGINES = _engine_names()
 
 #: Largest stored time series (rows): each row holds ~(3 n + nz + 2) doubles, so 5e6 rows of the
 #: 3R are ~0.6 GB. A longer run must lower ``output_rate``.
@@ -267,17 +270,10 @@ def _message(status: int, t_end: float, opt: SimOptions, law=None) -> str:
 
 
 def _engine(plant, law, opt: SimOptions) -> str:
-    eng = getattr(plant.rigid, "fast_engine", None)
-    fast_ok = eng is not None and law.code is not None and plant.compiled
-    if opt.engine == "auto":
-        return "fast" if fast_ok else "python"
-    if opt.engine == "fast" and not fast_ok:
-        why = (f"robot {plant.rigid.name!r} has no compiled simulator" if eng is None
-               else f"law {law.name!r} has no compiled kernel" if law.code is None
-               else "the plant has an effect the compiled engine does not apply: "
-                    + ", ".join(e.name for e in plant.effects if not (e.compiled or e.monitor)))
-        raise ParameterError(f"engine 'fast' is not available: {why} (use engine 'python')")
-    return opt.engine
+    """The registered engine's canonical name for ``opt.engine`` (:func:`rc3r.simulate.engines.choose`)."""
+    from .engines import choose
+
+    return choose(opt.engine, plant, law)
 
 
 def _check_structure(plant, model, law, trajectory, loop, opt) -> None:
@@ -358,12 +354,12 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
         x0 = loop.x0(*trajectory.evaluate(0.0)[:2])
     x0 = _initial_state(plant.n, law, trajectory, x0)
     engine = _engine(plant, law, options)
-    if engine == "fast":
-        from ._fast import run
-    else:
-        from ._python import run
-    if engine == "fast":
-        _warm_up(run, plant, law, trajectory, options, x0)
+    from .engines import get_engine
+
+    eng = get_engine(engine)
+    run = eng.run
+    if eng.compiled:
+        _warm_up(run, plant, law, trajectory, replace(options, engine=engine), x0)
     S.raise_if_stopped()  # a signal during numba's compilation may have been swallowed there
     t0 = time.perf_counter()
     out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
@@ -377,14 +373,13 @@ _WARMED: set = set()
 def _warm_up(run, plant, law, trajectory, opt: SimOptions, x0) -> None:
     """Run two output periods once per compiled integrator and process, untimed, so that numba's
     compilation (or cache load) is never booked as a simulation's wall time."""
-    eng = plant.rigid.fast_engine
-    key = (eng if isinstance(eng, type) else type(eng), opt.mode)
+    key = (opt.engine, getattr(plant.rigid, "fast_engine", None), opt.mode)  # one compiled integrator
     if key in _WARMED:
         return
     short = 2.0 / (opt.output_rate if opt.rate is None else min(opt.rate, opt.output_rate))
     if opt.rate is not None:
         short = max(short, 2.0 / opt.rate)
-    run(plant, law, trajectory, replace(opt, duration=min(short, opt.duration), engine="fast"), x0)
+    run(plant, law, trajectory, replace(opt, duration=min(short, opt.duration)), x0)
     _WARMED.add(key)
 
 

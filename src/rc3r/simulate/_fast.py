@@ -1,6 +1,20 @@
-"""The ``fast`` engine: a robot's compiled simulator (:attr:`Robot.fast_engine`) driven by packed arrays.
+"""The ``fast`` (``compiled``) engine's driver: one instantiation of :mod:`.engines.compiled` per kernel
+supply, run in chunks.
 
-The compiled integrators run in chunks of :data:`CHUNK_S` simulated seconds: between two
+**Instantiation.** A robot names its kernel supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`
+``(module, kc)`` (contract: :mod:`.engines._template`). :func:`instantiate` writes the source of
+:mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module into a
+cache directory keyed by :func:`rc3r._numba_cache.package_hash` (and, for a supply outside rc3r,
+the supply's own source), atomically and only once (the first writer wins, so numba's stamp, the
+file's time and size, stays valid), and imports it: numba caches its functions on disk like any
+module's. Any edit of a numba module of the package makes a new directory, hence a fresh compile.
+The directory is ``$NUMBA_CACHE_DIR/rc3r_engines`` if that is set, else the user's cache
+(``$XDG_CACHE_HOME`` or ``~/.cache``)``/rc3r/engines``, else the temporary directory (never
+inside the package: :func:`rc3r._numba_cache.package_hash` reads every module there);
+instantiations of other package versions older than a day are removed. :class:`CompiledSimulator` is what a
+robot's ``fast_engine`` is: the instantiation of one supply behind the calls :func:`run` makes.
+
+**Chunks.** The compiled integrators run in chunks of :data:`CHUNK_S` simulated seconds: between two
 chunks control is back in Python, so Ctrl-C or SIGTERM (which the command line turns into
 ``KeyboardInterrupt``) stops a long run within one chunk's wall time (about 0.1 s for the
 paper's robust law), and the result keeps every chunk finished before it
@@ -11,16 +25,189 @@ stops within seconds instead of running for hours.
 """
 from __future__ import annotations
 
+import hashlib
+import importlib
+import importlib.util
+import os
+import re
+import sys
+import tempfile
+from pathlib import Path
+
 import numpy as np
 
+from .. import _numba_cache
+from ..errors import ParameterError
 from . import _limits, _result, _sample_grid
 from . import status as S
+
+__all__ = ["CompiledSimulator", "instantiate", "run", "CHUNK_S", "HMAX"]
 
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
 
 #: Largest continuous-time step [s]; the stored rows are interpolated inside the steps.
 HMAX = 0.001
+
+#: The line of :mod:`.engines.compiled` that each instantiation replaces.
+MARKER = ("from rc3r.simulate.engines._template import forward_dynamics_into as _fd, make_work as _make_work, "
+          "regressor_into as _regressor  # kernel supply")
+
+#: Age [s] past which an instantiation of another package version is removed.
+STALE_S = 86400.0
+
+_SUPPLY = ("make_work", "regressor_into", "forward_dynamics_into")
+_DOTTED = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*\Z")
+_INSTANCES: dict = {}
+
+
+def _roots():
+    env = os.environ.get("NUMBA_CACHE_DIR")
+    if env:
+        yield Path(env) / "rc3r_engines"
+        return
+    yield Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rc3r" / "engines"
+    yield Path(tempfile.gettempdir()) / f"rc3r-engines-{os.getuid() if hasattr(os, 'getuid') else 0}"
+
+
+def _prune(root: Path, keep: str) -> None:
+    """Remove the instantiations of other package versions not touched for :data:`STALE_S` (each
+    edit of a numba module makes a new one; a day-old one belongs to no running process)."""
+    import shutil
+    import time
+
+    try:
+        for d in root.iterdir():
+            if d.is_dir() and d.name != keep and time.time() - d.stat().st_mtime > STALE_S:
+                shutil.rmtree(d, ignore_errors=True)
+    except OSError:
+        pass
+
+
+def _write_once(path: Path, text: str) -> None:
+    """``path`` holds ``text``: written through a temporary file and a hard link (never replaced if
+    it already holds it, so its time stamp stays the one numba's cache was stamped with)."""
+    try:
+        if path.read_text() == text:
+            return
+        exists = True
+    except (OSError, UnicodeDecodeError):
+        exists = False
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
+    tmp.write_text(text)
+    try:
+        if exists:
+            os.replace(tmp, path)
+        else:
+            try:
+                os.link(tmp, path)
+            except FileExistsError:  # another process wrote it first: its file stands
+                pass
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def instantiate(module: str):
+    """The compiled integrators (:mod:`.engines.compiled`) instantiated on the kernel supply ``module``
+    (a dotted module name), imported once per process; ParameterError if it is no supply."""
+    if module in _INSTANCES:
+        return _INSTANCES[module]
+    if not isinstance(module, str) or not _DOTTED.match(module):
+        raise ParameterError(f"kernel supply must be a dotted module name, got {module!r}")
+    try:
+        supply = importlib.import_module(module)
+    except ImportError as exc:
+        raise ParameterError(f"kernel supply {module!r} cannot be imported: {exc}") from None
+    missing = [f for f in _SUPPLY if not hasattr(supply, f)]
+    if missing:
+        raise ParameterError(f"kernel supply {module!r} lacks {', '.join(missing)} (rc3r.simulate.engines._template)")
+    template = (Path(__file__).resolve().parent / "engines" / "compiled.py").read_text()
+    if template.count(MARKER) != 1:
+        raise RuntimeError("rc3r.simulate.engines.compiled lost its kernel-supply line")
+    source = template.replace(MARKER, MARKER.replace("rc3r.simulate.engines._template", module))
+    h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode() + source.encode())
+    supply_file = getattr(supply, "__file__", None)
+    if supply_file and not _numba_cache._inside(supply_file):  # outside the package: its own source counts
+        h.update(Path(supply_file).read_bytes())
+    key = h.hexdigest()[:16]
+    stem = module.replace(".", "_")
+    errors = []
+    for root in _roots():
+        path = root / key / f"{stem}.py"
+        try:
+            _write_once(path, source)
+            _prune(root, key)
+            break
+        except OSError as exc:
+            errors.append(f"{root}: {exc.strerror or exc}")
+    else:
+        raise ParameterError("cannot write the compiled engine's source: " + "; ".join(errors))
+    name = f"_rc3r_engine_{stem}_{key}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    _INSTANCES[module] = mod
+    return mod
+
+
+class CompiledSimulator:
+    """A robot's ``fast_engine``: the compiled integrators instantiated on the kernel supply ``module``.
+
+    ``continuous(rigid, ...)`` returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``;
+    ``sampled(rigid, ..., s0, ...)`` (s0: first sample index) returns
+    ``(status, n_stored, n_rhs, n_samples_done, t_end)``; both fill the output arrays ``X``
+    (state), ``U`` (torque), ``R`` (q_d), ``yn`` (||Y^T r||), on the constants of
+    ``rigid.compiled_kernels``.
+    """
+
+    def __init__(self, module: str):
+        self.module = module
+
+    def __eq__(self, other):
+        return isinstance(other, CompiledSimulator) and other.module == self.module
+
+    def __hash__(self):
+        return hash(("CompiledSimulator", self.module))
+
+    def __repr__(self) -> str:
+        return f"CompiledSimulator({self.module!r})"
+
+    @property
+    def instance(self):
+        """The instantiated module (:func:`instantiate`)."""
+        return instantiate(self.module)
+
+    def constants(self, rigid) -> np.ndarray:
+        """The packed constants ``kc`` of ``rigid`` (its ``compiled_kernels`` must name this supply)."""
+        module, kc = rigid.compiled_kernels
+        if module != self.module:
+            raise ParameterError(f"robot {rigid.name!r} supplies kernels {module!r}, its engine runs {self.module!r}")
+        return np.ascontiguousarray(kc, dtype=np.float64)
+
+    def is_cached(self) -> bool:
+        """True if numba's disk cache holds both integrators of this supply (no compilation on first use).
+
+        Reads numba's cache index paths (an internal of numba 0.5x-0.6x); if they cannot be
+        read, answers True (no announcement rather than a wrong one).
+        """
+        try:
+            mod = self.instance
+            return all(os.path.exists(f._cache._cache_file._index_path)
+                       for f in (mod.integrate_continuous, mod.integrate_sampled))
+        except (AttributeError, ParameterError):
+            return True
+
+    def continuous(self, rigid, fx, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
+                   max_steps):
+        return self.instance.integrate_continuous(x0, t_out, self.constants(rigid), fx, code, cp, tp, rtol, atol, h0,
+                                                  hmax, lim, X, U, R, yn, jac_reuse, max_steps)
+
+    def sampled(self, rigid, fx, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv, noise, quant,
+                ubuf):
+        return self.instance.integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, self.constants(rigid), fx, code, cp,
+                                               tp, lim, X, U, R, yn, tv, noise, quant, ubuf)
 
 
 def run(plant, law, trajectory, opt, x0, loop=None, model=None):

@@ -1,9 +1,10 @@
 """Integrators side by side on the same compiled closed loop (part of ``rc3r bench``).
 
-The 3R's continuous-time simulator is a hand-written Rosenbrock method
-(:mod:`.engine`). This section makes it justify itself against library solvers on
-the *same* compiled right-hand side (:func:`.engine.closed_loop_rhs`: closed-form plant,
-law kernel, trajectory) and the same tolerances (``rtol = 1e-6``, ``atol = 1e-8``):
+The compiled engine's continuous-time integrator is a hand-written Rosenbrock method
+(:mod:`rc3r.simulate.engines.compiled`, instantiated on the 3R's kernel supply :mod:`.engine`).
+This section makes it justify itself against library solvers on the *same* compiled
+right-hand side (``closed_loop_xdot`` of that instantiation: closed-form plant, law kernel,
+trajectory) and the same tolerances (``rtol = 1e-6``, ``atol = 1e-8``):
 
 * ``rosenbrock, J every step`` -- MATLAB's ode23s scheme (``jac_reuse = 1``);
 * ``rosenbrock, J kept 5 steps`` -- the default (``jac_reuse = 5``);
@@ -19,32 +20,19 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from numba import njit
 from scipy.integrate import solve_ivp
-
-from . import engine as E
 
 __all__ = ["bench_integrators"]
 
 
-@njit(cache=True)
-def _rhs(t, x, thp, fx, law, cp, tp, l2, g0):
-    n = x.shape[0]
-    xdot = np.empty(n)
-    u = np.empty(3); ref = np.empty((3, 3)); Y = np.empty((3, 15)); xi = np.empty(15)
-    w33 = np.empty((3, 3)); w3 = np.empty(3)
-    v = np.empty(3); a = np.empty(3); r = np.empty(3); w = np.empty(3); ys = np.empty(1)
-    E.closed_loop_rhs(t, x, thp, fx, law, cp, tp, l2, g0, xdot, u, ref, Y, xi, w33, w3, v, a, r, w, ys)
-    return xdot
-
-
 def _scipy(spec, x0, t_out, method: str, rtol: float, atol: float):
-    p = spec.plant
-    cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
-    l2, g0 = p.params.lengths[1], p.params.g0
     from ...plants import as_plant
 
-    args = (p.theta, as_plant(p).pack(), code, cp, tp, l2, g0)
+    p = spec.plant
+    cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
+    eng = p.fast_engine
+    _rhs = eng.instance.closed_loop_xdot
+    args = (eng.constants(p), as_plant(p).pack(), code, cp, tp, p.n)
     _rhs(0.0, x0, *args)  # compile / load before timing
     t0 = time.perf_counter()
     sol = solve_ivp(_rhs, (t_out[0], t_out[-1]), x0, method=method, t_eval=t_out, rtol=rtol, atol=atol,

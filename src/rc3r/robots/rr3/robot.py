@@ -3,7 +3,7 @@ r"""The paper's 3R spatial arm as a :class:`~rc3r.robots.base.Robot`.
 Closed-form model (:mod:`.model`), regressor (:mod:`.regressor`) and compiled
 kernels (:mod:`.kernels`) in the paper's 15 coefficients; the Pinocchio model of
 the same parameters (through :mod:`.urdf`) is the ground-truth plant; the compiled
-closed-loop simulator is :mod:`.engine`.
+kernel supply of the compiled engine is :mod:`.engine`.
 """
 from __future__ import annotations
 
@@ -12,10 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ...simulate._fast import CompiledSimulator
 from ..base import Robot
 from . import model as _model
 from . import regressor as _reg
-from .engine import FastEngine
+from . import engine as _engine
 from .params import STD_NAMES, ArmParams, physical_issues, table1, theta, theta_from_vector
 
 __all__ = ["RR3", "PARAM_NAMES", "COEFFICIENT_NAMES"]
@@ -46,7 +47,13 @@ class RR3(Robot):
     name = "rr3"
     #: What theta's entries are (``verify-model`` prints it).
     theta_order = "paper order, section 3.1.1"
-    fast_engine = FastEngine
+    #: The compiled engine instantiated on this arm's kernel supply (:mod:`.engine`).
+    fast_engine = CompiledSimulator(_engine.ENGINE)
+
+    @property
+    def compiled_kernels(self) -> tuple[str, np.ndarray]:
+        """``(module, kc)``: the kernel supply :mod:`.engine` and its constants ``[theta, l2, g0]``."""
+        return _engine.ENGINE, _engine.pack(self)
 
     def __init__(self, params: ArmParams, label: str = "nominal", model=None, urdf: str | None = None):
         self.params = params
@@ -196,6 +203,12 @@ class RR3(Robot):
         if not ok:
             raise FloatingPointError("closed-form mass matrix is not positive definite")
         return qdd
+
+    def c_regressor_source(self) -> str:
+        """The closed-form Slotine--Li regressor as C99 source, for ``rc3r export`` (:mod:`.c_kernels`)."""
+        from .c_kernels import c_regressor_source
+
+        return c_regressor_source(self)
 
     def _data(self):
         if getattr(self, "_pin_data", None) is None:

@@ -1,0 +1,405 @@
+r"""The compiled engine's integrators, written once for any n and p (numba): a template.
+
+State ``x = (q, qd, z)``: joint positions [rad], velocities [rad/s] and the controller state
+``z`` (the adaptive law's theta estimate; empty otherwise).
+
+* :func:`integrate_continuous` -- the controller inside the integrator (continuous
+  time). The robust law's boundary layer makes the loop stiff (gain ``rho/eps Y Y^T``
+  ~ 1e6), so the integrator is the L-stable Rosenbrock pair of Shampine & Reichelt,
+  "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18 (1997) (MATLAB's ode23s): order 2
+  step, order 3 error estimate, Jacobian by forward differences, kept for
+  ``jac_reuse`` accepted steps (refreshed after a rejection; 1 = every step as ode23s).
+  Steps are not clipped to the output times: the stored rows are the cubic Hermite
+  interpolant of the two ends of the step that contains them (third order, like the step).
+  At most ``max_steps`` steps per call (the work budget).
+* :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and
+  held (zero-order hold); the plant is integrated over each period by classical RK4
+  with ``nsub`` sub-steps; the controller state is updated by forward Euler.
+
+The plant's effects (friction, saturation: the fields ``fx`` of
+:meth:`rc3r.plants.Plant.pack`) and the loop's (noise, quantization, delay line) are applied
+by :mod:`rc3r.plants._kernels`; the law by the generic kernels of
+:mod:`rc3r.controllers._kernels` (selected by its integer code). The robot enters only
+through its **kernel supply** (:mod:`._template` states the contract): ``_make_work``,
+``_regressor``, ``_fd`` below, on its packed constants ``kc``. n is ``U.shape[1]``, p is
+``cp[0]``.
+
+This module is never run as it stands: the import line marked ``# kernel supply`` names the
+stubs of :mod:`._template`, and :func:`rc3r.simulate._fast.instantiate` writes a copy of this
+source per supply with that one line naming the supply's module (numba caches a module on
+disk, but not a function that receives another jitted function, nor a closure over one). So
+every import here is absolute. Status codes: :mod:`rc3r.simulate.status`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from rc3r.controllers._kernels import apply_regressor, law_output, law_signals
+from rc3r.plants._kernels import actuate, apply_effects, measure
+from rc3r.simulate.engines._template import forward_dynamics_into as _fd, make_work as _make_work, regressor_into as _regressor  # kernel supply
+from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
+from rc3r.trajectory import reference_into
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+
+
+@njit(**dict(_JIT, inline="always"))
+def control(law, cp, q, qd, z, ref, kc, wk, u, zdot, Y, th_eff, v, a, r, w):
+    """u (n,) and zdot of a registered law (code ``law``) on the supply's regressor; returns ||Y^T r||."""
+    law_signals(law, cp, q, qd, ref, v, a, r, w)
+    _regressor(kc, q, qd, v, a, Y, wk)
+    yn = law_output(law, cp, Y, r, z, th_eff, zdot)
+    apply_regressor(Y, th_eff, w, u)
+    return yn
+
+
+@njit(**_JIT)
+def _friction(fx, n):
+    """True if ``fx`` has a joint torque (viscous, Coulomb or offset friction) on some joint."""
+    for j in range(3 * n):
+        if fx[j] != 0.0:
+            return True
+    return False
+
+
+@njit(**dict(_JIT, inline="always"))
+def _joint_torque(fx, fric, qd, ua, tau):
+    """``tau`` = the joint torque for the delivered ``ua``: :func:`~rc3r.plants._kernels.apply_effects`
+    if ``fric``, else ``ua`` itself (what apply_effects returns then, ``ua - 0``, without its tanh calls)."""
+    if fric:
+        apply_effects(fx, qd, ua, tau)
+    else:
+        for j in range(ua.shape[0]):
+            tau[j] = ua[j]
+
+
+@njit(**_JIT)
+def closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys):
+    """xdot = f(t, x); fills ``u`` with the delivered torque (the law's, through the plant's actuator
+    effects ``fx``; ``fric = _friction(fx, n)``) and ``ys[0] = ||Y^T r||``. Returns False if the plant M
+    is not PD."""
+    n = u.shape[0]
+    reference_into(tp, t, ref)
+    ys[0] = control(law, cp, x[0:n], x[n:2 * n], x[2 * n:], ref, kc, wk, u, xdot[2 * n:], Y, xi, v, a, r, w)
+    actuate(fx, u, u)
+    _joint_torque(fx, fric, x[n:2 * n], u, w)  # w (the law's additive term) is free again: the joint torque
+    for i in range(n):
+        xdot[i] = x[n + i]
+    return _fd(kc, x[0:n], x[n:2 * n], w, xdot[n:2 * n], wk)
+
+
+@njit(**_JIT)
+def _lu_factor(A, piv):
+    """In-place LU with partial pivoting (small dense n x n)."""
+    n = A.shape[0]
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                p = i
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        if A[k, k] == 0.0:
+            return False
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            A[i, k] *= inv
+            f = A[i, k]
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    return True
+
+
+@njit(**_JIT)
+def _lu_solve(LU, piv, b):
+    n = LU.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(n):
+        acc = b[i]
+        for j in range(i):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= LU[i, j] * b[j]
+        b[i] = acc / LU[i, i]
+
+
+@njit(**_JIT)
+def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys):
+    """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x))."""
+    n = x.shape[0]
+    sqeps = math.sqrt(2.220446049250313e-16)
+    for j in range(n):
+        dx = sqeps * max(abs(x[j]), 1e-3)
+        xj = x[j]
+        x[j] = xj + dx
+        closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys)
+        x[j] = xj
+        for i in range(n):
+            J[i, j] = (Fp[i] - F0[i]) / dx
+    dt = sqeps * max(abs(t), 1.0)
+    closed_loop_rhs(t + dt, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys)
+    for i in range(n):
+        Ft[i] = (Fp[i] - F0[i]) / dt
+    return n + 1
+
+
+@njit(**_JIT)
+def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, lim,
+                         X, U, R, ynorm, jac_reuse, max_steps):
+    """Integrate from ``t_out[0]``; store x, u, q_d rows at every ``t_out`` (n joints: ``U.shape[1]``).
+
+    At most ``max_steps`` steps (accepted and rejected) are taken in this call; past that it
+    returns :data:`~rc3r.simulate.status.WORK` where it stands (a too stiff loop, e.g. a
+    boundary layer eps so thin that the step size collapses without reaching underflow), so a
+    call's wall time stays bounded and the caller regains control.
+
+    The Jacobian is recomputed every ``jac_reuse`` accepted steps and after any
+    rejected step taken with an older one (``jac_reuse = 1``: every step, as ode23s).
+    Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
+    ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
+    """
+    n = x0.shape[0]
+    d = 1.0 / (2.0 + math.sqrt(2.0))
+    e32 = 6.0 + math.sqrt(2.0)
+    x = x0.copy()
+    xnew = np.empty(n)
+    F0 = np.empty(n); F1 = np.empty(n); F2 = np.empty(n); Ft = np.empty(n); Fp = np.empty(n)
+    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); tmp = np.empty(n)
+    J = np.empty((n, n)); W = np.empty((n, n)); piv = np.zeros(n, dtype=np.int64)
+    nj = U.shape[1]
+    p = int(cp[0])
+    wk = _make_work(kc)
+    fric = _friction(fx, nj)
+    u = np.empty(nj); ref = np.empty((3, nj)); Y = np.empty((nj, p)); xi = np.empty(p)
+    v = np.empty(nj); a = np.empty(nj); r = np.empty(nj); w = np.empty(nj)
+    ys = np.empty(1); u0 = np.empty(nj)
+    nrhs = 0; nsteps = 0; nrej = 0
+    t = t_out[0]
+    ok = closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, F0, u, ref, Y, xi, v, a, r, w, ys)
+    nrhs += 1
+    X[0] = x; U[0] = u; R[0] = ref[0]
+    ynorm[0] = ys[0]
+    u0[:] = u
+    ys0 = ys[0]
+    if not ok:
+        return NOTPD, 1, nrhs, nsteps, nrej, t
+    st = check(x, u, lim)
+    if st != OK:
+        return st, 1, nrhs, nsteps, nrej, t
+    h = h0
+    jac_age = jac_reuse  # accepted steps since the Jacobian was computed
+    t_final = t_out[t_out.shape[0] - 1]
+    k = 1  # next output row
+    while k < t_out.shape[0]:
+        h = min(h, hmax)
+        last = False
+        if t + h >= t_final - 1e-12 * max(1.0, abs(t_final)):
+            h = t_final - t
+            last = True
+        if jac_age >= jac_reuse:
+            nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys)
+            jac_age = 0
+        while True:
+            if nsteps + nrej >= max_steps:
+                return WORK, k, nrhs, nsteps, nrej, t
+            hd = h * d
+            for i in range(n):
+                for j in range(n):
+                    W[i, j] = -hd * J[i, j]
+                W[i, i] += 1.0
+            if not _lu_factor(W, piv):
+                return HMIN, k, nrhs, nsteps, nrej, t
+            for i in range(n):
+                k1[i] = F0[i] + hd * Ft[i]
+            _lu_solve(W, piv, k1)
+            for i in range(n):
+                tmp[i] = x[i] + 0.5 * h * k1[i]
+            ok1 = closed_loop_rhs(t + 0.5 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w,
+                                  ys)
+            for i in range(n):
+                k2[i] = F1[i] - k1[i]
+            _lu_solve(W, piv, k2)
+            for i in range(n):
+                k2[i] += k1[i]
+                xnew[i] = x[i] + h * k2[i]
+            ok2 = closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys)
+            nrhs += 2
+            for i in range(n):
+                k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
+            _lu_solve(W, piv, k3)
+            err = 0.0  # RMS norm of the scaled error estimate (Hairer & Wanner; SciPy's solve_ivp)
+            for i in range(n):
+                sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
+                ei = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]) / sc
+                err += ei * ei
+            err = math.sqrt(err / n)
+            if not (err <= 1e300):  # NaN or overflow
+                err = 1e300
+            if ok1 and ok2 and err <= 1.0:
+                break
+            nrej += 1
+            last = False
+            if jac_age > 0:  # rejected with an old Jacobian: refresh it first
+                nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w,
+                                  ys)
+                jac_age = 0
+            h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / 3.0)) if err < 1e300 else 0.1 * h
+            if h < 1e-14 * max(1.0, abs(t)):
+                return HMIN, k, nrhs, nsteps, nrej, t
+        nsteps += 1
+        jac_age += 1
+        t_new = t_final if last else t + h
+        st = check(xnew, u, lim)
+        if st != OK:
+            for i in range(n):
+                x[i] = xnew[i]
+            return st, k, nrhs, nsteps, nrej, t_new
+        # outputs inside (t, t_new]: the state by cubic Hermite on (x, F0) and (xnew, F2), third order
+        # like the step; u and ||Y^T r|| linearly between their values on the integrated states (evaluating
+        # the stiff boundary-layer law on an interpolated state would add noise of gain x interpolation error)
+        while k < t_out.shape[0] and (t_out[k] <= t_new or (last and k == t_out.shape[0] - 1)):
+            s_ = (t_out[k] - t) / h
+            if k == t_out.shape[0] - 1 and last:
+                s_ = 1.0
+            h00 = (1.0 + 2.0 * s_) * (1.0 - s_) * (1.0 - s_)
+            h10 = s_ * (1.0 - s_) * (1.0 - s_)
+            h01 = s_ * s_ * (3.0 - 2.0 * s_)
+            h11 = s_ * s_ * (s_ - 1.0)
+            for i in range(n):
+                tmp[i] = h00 * x[i] + h * h10 * F0[i] + h01 * xnew[i] + h * h11 * F2[i]
+            X[k] = tmp
+            for i in range(nj):
+                U[k, i] = (1.0 - s_) * u0[i] + s_ * u[i]
+            ynorm[k] = (1.0 - s_) * ys0 + s_ * ys[0]
+            reference_into(tp, t_out[k], ref)
+            R[k] = ref[0]
+            k += 1
+        u0[:] = u
+        ys0 = ys[0]
+        t = t_new
+        for i in range(n):
+            x[i] = xnew[i]
+            F0[i] = F2[i]
+        fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / 3.0)))
+        h = h * fac
+    return OK, t_out.shape[0], nrhs, nsteps, nrej, t
+
+
+@njit(**_JIT)
+def _plant_rhs(x, u, kc, wk, fx, fric, xdot, tau):
+    """Plant only, under the delivered torque ``u``: the joint torque adds the friction of ``fx``."""
+    n = u.shape[0]
+    _joint_torque(fx, fric, x[n:2 * n], u, tau)
+    for i in range(n):
+        xdot[i] = x[n + i]
+    return _fd(kc, x[0:n], x[n:2 * n], tau, xdot[n:2 * n], wk)
+
+
+@njit(**_JIT)
+def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
+                      X, U, R, ynorm, tv, noise, quant, ubuf):
+    """Zero-order-hold loop: ``nsamples`` periods of ``Ts`` from sample ``s0`` (t = (s0 + s) Ts, exact
+    whatever the chunking); store every ``dec``-th sample.
+
+    The controller sees the measurement of :func:`rc3r.plants._kernels.measure` (``noise`` rows by
+    global sample index, ``quant`` encoder steps); its torque goes through the delay line ``ubuf``
+    (d + 1, n) (persistent across chunks: sample k writes row k mod (d + 1) and the plant gets the
+    command of sample k - d, or of sample 0 while k < d) and the actuator effects of ``fx``.
+    The stored ``U`` is the delivered torque; the |u| bound is checked on the command.
+    ``tv`` (n,) accumulates the total variation of the delivered torque over all samples.
+    Returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``.
+    """
+    n = x0.shape[0]
+    nj = U.shape[1]
+    n2 = 2 * nj
+    p = int(cp[0])
+    wk = _make_work(kc)
+    fric = _friction(fx, nj)
+    x = x0.copy()
+    zdot = np.zeros(max(n - n2, 0))
+    u = np.empty(nj); uprev = np.empty(nj)
+    ref = np.empty((3, nj)); Y = np.empty((nj, p)); xi = np.empty(p)
+    v = np.empty(nj); a = np.empty(nj); r = np.empty(nj); w = np.empty(nj)
+    k1 = np.empty(n2); k2 = np.empty(n2); k3 = np.empty(n2); k4 = np.empty(n2); xs = np.empty(n2)
+    qm = np.empty(nj); qdm = np.empty(nj); ua = np.empty(nj); tau = np.empty(nj)
+    nd = ubuf.shape[0]  # delay + 1
+    h = Ts / nsub
+    nrhs = 0
+    stored = 0
+    for s in range(nsamples + 1):
+        kk = s0 + s
+        t = kk * Ts
+        reference_into(tp, t, ref)
+        measure(x, kk, noise, quant, qm, qdm)
+        yn = control(law, cp, qm, qdm, x[n2:], ref, kc, wk, u, zdot, Y, xi, v, a, r, w)
+        for i in range(nj):
+            ubuf[kk % nd, i] = u[i]
+        row = (kk - nd + 1) % nd if kk >= nd - 1 else 0
+        for i in range(nj):
+            ua[i] = ubuf[row, i]
+        actuate(fx, ua, ua)
+        if s > 0:
+            for i in range(nj):
+                tv[i] += abs(ua[i] - uprev[i])
+        for i in range(nj):
+            uprev[i] = ua[i]
+        st = check(x, u, lim)
+        if s % dec == 0 or st != OK:
+            X[stored] = x; U[stored] = ua; R[stored] = ref[0]; ynorm[stored] = yn
+            stored += 1
+        if st != OK:
+            return st, stored, nrhs, s, t
+        if s == nsamples:
+            break
+        for sub in range(nsub):
+            ok = _plant_rhs(x, ua, kc, wk, fx, fric, k1, tau)
+            for i in range(n2):
+                xs[i] = x[i] + 0.5 * h * k1[i]
+            ok &= _plant_rhs(xs, ua, kc, wk, fx, fric, k2, tau)
+            for i in range(n2):
+                xs[i] = x[i] + 0.5 * h * k2[i]
+            ok &= _plant_rhs(xs, ua, kc, wk, fx, fric, k3, tau)
+            for i in range(n2):
+                xs[i] = x[i] + h * k3[i]
+            ok &= _plant_rhs(xs, ua, kc, wk, fx, fric, k4, tau)
+            nrhs += 4
+            if not ok:
+                return NOTPD, stored, nrhs, s, t
+            for i in range(n2):
+                x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        for i in range(n - n2):  # controller state: forward Euler, as a digital controller
+            x[n2 + i] += Ts * zdot[i]
+    return OK, stored, nrhs, nsamples, (s0 + nsamples) * Ts
+
+
+@njit(**_JIT)
+def closed_loop_xdot(t, x, kc, fx, law, cp, tp, n):
+    """xdot (new array) of the closed loop at (t, x), for library solvers (``rc3r bench``'s integrators);
+    NaN where the plant's M is not positive definite."""
+    p = int(cp[0])
+    wk = _make_work(kc)
+    fric = _friction(fx, n)
+    xdot = np.empty(x.shape[0])
+    u = np.empty(n); ref = np.empty((3, n)); Y = np.empty((n, p)); xi = np.empty(p)
+    v = np.empty(n); a = np.empty(n); r = np.empty(n); w = np.empty(n); ys = np.empty(1)
+    if not closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys):
+        xdot[:] = np.nan
+    return xdot
