@@ -164,3 +164,59 @@ def test_limit_crossings_by_hand():
     qd = np.array([[0.0, 0.0], [0.0, 1.0], [0.0, 2.5], [0.0, 0.0]])
     out = crossings(lim, t, q, qd)
     assert out == {"position": [0.2, None], "velocity": [None, 0.2], "violated": True}
+
+
+def test_pack_layout_by_hand():
+    """The compiled engines' fields: [viscous, coulomb, offset, v_s, u_max] per joint, zeros and inf
+    without effects (the rigid plant's arithmetic is then the identity)."""
+    arm = rc3r.load_robot()
+    np.testing.assert_array_equal(Plant(arm).pack(), [0.0] * 9 + [1.0] + [np.inf] * 3)
+    plant = Plant(arm, [Friction([1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0], v_s=0.5),
+                        Saturation([10.0, 20.0, 30.0])])
+    np.testing.assert_array_equal(plant.pack(), [1, 2, 3, 4, 5, 6, 7, 8, 9, 0.5, 10, 20, 30])
+    assert plant.effect("saturation").limit.tolist() == [10.0, 20.0, 30.0] and plant.effect("nope") is None
+
+
+def test_effect_construction_rules():
+    """Scalars broadcast, sizes are checked against the arm, effects are frozen (a plant is data)."""
+    import dataclasses
+
+    f = Friction(coulomb=[1.0, 2.0, 3.0], offset=0.5)
+    assert f.n == 3 and f.viscous.tolist() == [0.0] * 3 and f.offset.tolist() == [0.5] * 3
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        f.v_s = 1.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        JointLimits([0.0], [1.0], [1.0]).lower = 0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        LoopEffects(1).delay = 3
+    with pytest.raises(ConfigError, match="sized for 2 joints"):
+        Plant(rc3r.load_robot(), [Friction([1.0, 2.0])])
+    with pytest.raises(ConfigError, match="given twice"):
+        Plant(rc3r.load_robot(), [Saturation([1.0] * 3), Saturation([2.0] * 3)])
+    drawn = Friction.draw({"viscous": {"lo": 1.0, "hi": 1.0}}, 3, np.random.default_rng(0))
+    assert drawn.coulomb.tolist() == [0.0] * 3 and drawn.offset.tolist() == [0.0] * 3
+    assert drawn.viscous.tolist() == [1.0] * 3
+
+
+@pytest.mark.parametrize("lo, hi, vel", [([1.0], [0.0], [1.0]), ([0.0], [1.0], [0.0]), ([0.0], [np.nan], [1.0])])
+def test_bad_joint_limits_are_refused(lo, hi, vel):
+    with pytest.raises(ConfigError, match="joint limits"):
+        JointLimits(lo, hi, vel)
+
+
+def test_limits_without_a_range_are_unbounded():
+    """The double pendulum's URDF says lower = upper = 0: no range, so no crossing is ever reported."""
+    robot = PinocchioRobot.from_urdf(example_robot_data_dir() / "double_pendulum_description/urdf/double_pendulum.urdf")
+    lim = JointLimits.from_model(robot)
+    assert lim.lower.tolist() == [-np.inf, -np.inf] and lim.upper.tolist() == [np.inf, np.inf]
+    assert np.all(lim.velocity > 0)
+    q = np.array([[5.0, -5.0]])
+    assert crossings(lim, np.zeros(1), q, np.zeros((1, 2)))["violated"] is False
+
+
+@pytest.mark.parametrize("kwargs", [dict(delay=-1), dict(delay=1001), dict(delay=1.5), dict(delay=True),
+                                    dict(seed=-1), dict(noise_q=-1.0), dict(noise_q=[1.0, 2.0])])
+def test_bad_loop_effects_are_refused(kwargs):
+    with pytest.raises(ConfigError):
+        LoopEffects(3, **kwargs)
+    assert LoopEffects(3, delay=1000).delay == 1000

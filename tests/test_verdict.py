@@ -64,3 +64,17 @@ def test_paper_robust_law_verdicts(rate, expect):
     res, m = rc3r.execute(spec)
     assert res.ok and m["verdict"] == expect
     assert m["tolerance_met"] is True  # max|e| < 1e-3 rad either way: chattering is a torque problem
+
+
+def test_continuous_runs_never_chatter_and_rows_matter():
+    """Chattering is a sampled-data verdict: a continuous run with the same torque is clean; a run with
+    one stored row, or fewer rows than the smoothing window (10), has no chattering to judge (its
+    'smooth' torque is itself); 11 rows of alternation are enough."""
+    k = np.arange(2001)
+    u = (300.0 * (-1.0) ** k)[:, None]
+    res = _res(u)
+    res.mode = "continuous"
+    assert V.chattering(res) == [False]
+    assert V.chattering(_res(u[:1])) == [False]
+    assert V.chattering(_res(u[:9])) == [False]
+    assert V.chattering(_res(u[:11])) == [True]

@@ -42,7 +42,7 @@ __all__ = ["verdict", "chattering", "saturation_fraction", "VERDICTS", "TOLERANC
 #: Verdicts, in the order they are tested.
 VERDICTS = ("interrupted", "diverged", "limit-violated", "saturated", "chattering", "clean")
 
-#: Default tracking tolerance on max |e_j| [rad] (0.57 degrees).
+#: Default tracking tolerance on ``max |e_j|`` [rad] (0.57 degrees).
 TOLERANCE = 0.01
 
 #: A run is ``saturated`` when a torque limit holds for more than this fraction of the stored samples.
@@ -93,7 +93,7 @@ def verdict(res, *, saturation=None, limits=None, tolerance: float = TOLERANCE) 
     saturation : (n,) torque limits [N m] of the plant, or None
     limits : dict of :func:`rc3r.plants.limits.crossings`, or None
     tolerance : float
-        Tracking tolerance on max |e_j| [rad].
+        Tracking tolerance on ``max |e_j|`` [rad].
 
     Returns
     -------
