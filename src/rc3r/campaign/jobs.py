@@ -82,7 +82,7 @@ class Job:
 #: Columns of ``runs.csv`` before the per-joint ones (docs/robustness.md defines each).
 ROW_KEYS = ("job", "plant", "plant_seed", "controller", "eps", "rate_hz", "theta_dist", "rho", "covered",
             "status", "t_end", "max_error", "final_error", "rms_error", "max_torque", "chattering",
-            "predicted_bound", "exceeds_bound")
+            "predicted_bound", "exceeds_bound", "verdict", "tolerance_met", "saturation_fraction")
 #: Per-joint columns (suffix ``_<j>``, j = 1..n).
 JOINT_KEYS = ("e_max", "e_final", "e_rms", "u_max", "tv")
 #: Columns of ``timing.csv`` (not deterministic, so not in ``runs.csv``).
@@ -139,6 +139,7 @@ def run_job(job: Job) -> tuple[dict, dict]:
         "chattering": float(np.sum(m["chattering"])),
         "predicted_bound": None if bound is None else float(bound.max()),
         "exceeds_bound": None if bound is None or not covered else bool(np.any(e_max > bound)),
+        "verdict": m["verdict"], "tolerance_met": m["tolerance_met"], "saturation_fraction": m["saturation_fraction"],
     }
     for key, name in zip(JOINT_KEYS, ("max_abs_error", "final_error_bound", "rms_error", "max_abs_torque",
                                       "chattering")):

@@ -169,6 +169,12 @@ def _campaign_args(p, out: str, plants: bool = False) -> None:
     p.add_argument("--workers", type=_positive(int), help="local worker processes (default: all cores)")
     p.add_argument("--scheduler", help="address of a Dask scheduler (tcp://HOST:PORT) instead of local workers")
     p.add_argument("--resume", action="store_true", help="continue the campaign in --out, skipping finished runs")
+    p.add_argument("--payload", type=_interval, metavar="LO:HI",
+                   help="unknown payload mass on the last link [kg]: plants carry masses of the range, the "
+                        "controllers get its exact bounds")
+    p.add_argument("--payload-com", type=_vector3, metavar="X,Y,Z",
+                   help="payload CoM in the last joint's frame [m] (default 0,0,0)")
+    plant_args(p)
 
 
 def build_parser() -> argparse.ArgumentParser:

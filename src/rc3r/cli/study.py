@@ -123,7 +123,29 @@ def _g(x) -> str:
 
 
 def _config(args) -> dict:
-    return {} if args.config is None else read_toml(args.config, "config file")
+    """The campaign's configuration: --config, then the arm and plant options of the command line on top
+    (every job gets them through its configuration: docs/control.md, "Plants")."""
+    cfg = {} if args.config is None else read_toml(args.config, "config file")
+    from .run import plant_options
+
+    opts = plant_options(args)
+    for key in ("urdf", "tolerance"):
+        if opts.get(key) is not None:
+            cfg[key] = opts[key]
+    if opts.get("lock"):
+        cfg["lock"] = opts["lock"]
+    if getattr(args, "payload", None) is not None:
+        cfg["payload"] = {"mass": list(args.payload)}
+        if getattr(args, "payload_com", None) is not None:
+            cfg["payload"]["com"] = list(args.payload_com)
+    plant = dict(cfg.get("plant", {}))
+    for key, name in (("friction", "friction"), ("torque_limit", "torque_limit"), ("noise", "noise"),
+                      ("delay", "delay"), ("plant_engine", "engine")):
+        if opts.get(key) is not None:
+            plant[name] = opts[key]
+    if plant:
+        cfg["plant"] = plant
+    return cfg
 
 
 def cmd_montecarlo(args) -> int:
