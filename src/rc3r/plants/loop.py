@@ -21,7 +21,7 @@ sequence, and the seed is recorded with the result.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -74,7 +74,6 @@ class LoopEffects:
     q0_error: np.ndarray | float = 0.0
     qd0_error: np.ndarray | float = 0.0
     seed: int = 0
-    _frozen: bool = field(default=True, repr=False)
 
     def __post_init__(self):
         n = self.n
