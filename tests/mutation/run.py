@@ -66,13 +66,27 @@ GROUPS = {
         ["src/rc3r/uncertainty/bounds.py"],
         ["tests/test_uncertainty.py", "tests/test_payload.py"],
     ),
+    # the simulators' verdicts and the plant effects: the by-hand tests (no long simulation runs
+    # with NUMBA_DISABLE_JIT=1) and the python engine's loop effects against recomputed torques
+    "plants": (
+        ["src/rc3r/simulate/verdict.py", "src/rc3r/plants/base.py", "src/rc3r/plants/friction.py",
+         "src/rc3r/plants/saturation.py", "src/rc3r/plants/limits.py", "src/rc3r/plants/loop.py"],
+        ["tests/test_verdict.py::test_alternating_torque_chatters_and_a_sine_does_not",
+         "tests/test_verdict.py::test_saturation_fraction_by_hand", "tests/test_verdict.py::test_order_and_tolerance",
+         "tests/test_plants.py::test_friction_torque_by_hand", "tests/test_plants.py::test_saturation_and_plant_torque_by_hand",
+         "tests/test_plants.py::test_effects_from_the_urdf_text", "tests/test_plants.py::test_friction_ranges_drawn_per_plant_and_seeded",
+         "tests/test_plants.py::test_noise_is_seeded", "tests/test_plants.py::test_limit_crossings_by_hand",
+         "tests/test_plants.py::test_urdf_without_friction_is_refused_in_one_line",
+         "tests/test_plants.py::test_loop_effects_against_recomputed_torques[python]",
+         "tests/test_plants.py::test_initial_error_and_continuous_refusal"],
+    ),
 }
 
 #: Fraction of each group's mutants that a default run tests (a seeded sample, the rest are
 #: marked "not sampled"): a full run of the model group (~1,400 mutants at ~4 s on a shared
 #: 2-core machine) takes hours; a uniform sample estimates the same score with a binomial
 #: standard error (printed). ``--sample 1`` tests every mutant.
-SAMPLE = {"model": 0.2, "controllers": 1.0, "metrics": 1.0, "bounds": 0.3}
+SAMPLE = {"model": 0.2, "controllers": 1.0, "metrics": 1.0, "bounds": 0.3, "plants": 0.4}
 
 #: Mutants that a review of the suite found it did not notice (issue: "tests that fail when the
 #: code is wrong"), applied by hand with ``--named``: each must make its group's tests fail.
