@@ -41,27 +41,21 @@ def test_rc3r_kernels_use_the_package_stamp():
 
 _PROBE = r"""
 import numpy as np
-from rc3r.robots.rr3.engine import integrate_sampled
-from rc3r.robots.rr3.params import table1, theta
-from rc3r.trajectory import Sines
 import rc3r
+from rc3r.simulate import SimOptions, simulate
 spec = rc3r.build_run(controller="fbl", duration=0.01, rate=1000.0)
-tp = spec.trajectory.pack()
 x0 = np.array([0.8, 0.0, 0.0, 0.0, 0.0, 0.0])   # |q1| = 0.8 rad, inside q_max = 1
-X = np.zeros((20, 6)); U = np.zeros((20, 3)); R = np.zeros((20, 3)); yn = np.zeros(20); tv = np.zeros(3)
-fx = np.concatenate([np.zeros(9), [1.0], np.full(3, np.inf)])
-st = integrate_sampled(x0, 0, 1e-3, 2, 1, 4, theta(table1()), fx, int(spec.law.code), spec.law.pack(3), tp,
-                       1.0, 9.81, np.array([1.0, 1e4, 1e7]), X, U, R, yn, tv, np.zeros((0, 6)), np.zeros(3),
-                       np.zeros((1, 3)))[0]
-print("STATUS", st)
+res = simulate(spec.plant, spec.law, spec.trajectory, SimOptions(duration=0.002, rate=1000.0, q_max=1.0,
+                                                                 engine="fast"), x0=x0)
+print("STATUS", 0 if res.ok else 2 if "|q|" in res.message else res.message)
 """
 
 
 @pytest.mark.slow
 def test_an_edit_of_a_called_module_reaches_the_compiled_engine(tmp_path):
-    """The 3R's integrator calls status.check from another file. Edit check so |q| = 0.8 rad passes
-    a bound of 1 rad only unedited; the next process must see the edit (status 2, QBOUND) although
-    engine.py itself is unchanged and its cache was written before the edit."""
+    """The compiled engine's integrators call status.check from another file. Edit check so |q| = 0.8 rad
+    passes a bound of 1 rad only unedited; the next process must see the edit (status 2, QBOUND) although
+    the engine's source is unchanged and its cache was written before the edit."""
     shutil.copytree(SRC / "rc3r", tmp_path / "rc3r", ignore=shutil.ignore_patterns("__pycache__"))
     env = dict(os.environ, PYTHONPATH=str(tmp_path))
     env.pop("NUMBA_CACHE_DIR", None)
