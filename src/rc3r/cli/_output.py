@@ -41,7 +41,7 @@ __all__ = ["output_dir", "check_output_path", "locked", "OWN_ENTRIES", "OUTPUT_M
 
 #: Files that mark a directory as rc3r's own output (it may then be replaced as a whole).
 OUTPUT_MARKERS = ("metrics.json", "summary.json", "sweep.json", "stability.json", "campaign.json", "runs.csv",
-                  "identified.json")
+                  "identified.json", "export.json")
 
 #: Entries (glob patterns) ``rc3r run`` and ``rc3r paper`` write in their directory: replaced by a
 #: rerun (an older run's ``animation.gif`` does not survive beside a new run without one). Any
