@@ -133,7 +133,7 @@ class CompiledEngine(Engine):
     def unavailable(self, plant, law):
         rigid = plant.rigid
         if getattr(rigid, "fast_engine", None) is None or getattr(rigid, "compiled_kernels", None) is None:
-            return f"robot {rigid.name!r} has no compiled simulator"
+            return f"robot {getattr(rigid, 'name', type(rigid).__name__)!r} has no compiled simulator"
         if law.code is None:
             return f"law {law.name!r} has no compiled kernel"
         if not plant.compiled:
