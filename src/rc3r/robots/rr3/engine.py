@@ -35,7 +35,7 @@ def regressor_into(kc, q, qd, v, a, Y, wk):
     K.slotine_li_scalars(q[1], q[2], qd[0], qd[1], qd[2], v[0], v[1], v[2], a[0], a[1], a[2], kc[15], kc[16], Y)
 
 
-@njit(**_JIT)
+@njit(**dict(_JIT, inline="always"))
 def forward_dynamics_into(kc, q, qd, tau, qdd, wk):
     """qdd of the closed form (theta = kc[:15]); False if M is not PD."""
     return K.forward_dynamics_into(kc, q, qd, tau, kc[15], kc[16], qdd, wk[0], wk[1])
