@@ -166,6 +166,28 @@ def test_a_worker_exits_within_the_poll_period_when_its_parent_dies_without_prct
         proc.stdout.close()
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="prctl is Linux's")
+def test_a_worker_asks_the_kernel_for_sigkill_at_its_parents_death():
+    """_worker_init sets PR_SET_PDEATHSIG to SIGKILL (read back with PR_GET_PDEATHSIG = 2 in a
+    forked child, so this test process is left as it was)."""
+    code = (
+        "import ctypes, os, signal\n"
+        "import rc3r.campaign.runner as runner\n"
+        "r, w = os.pipe()\n"
+        "pid = os.fork()\n"
+        "if pid == 0:\n"
+        "    runner._worker_init(os.getppid())\n"
+        "    sig = ctypes.c_int(0)\n"
+        "    ctypes.CDLL(None).prctl(2, ctypes.byref(sig), 0, 0, 0)\n"
+        "    os.write(w, str(sig.value).encode())\n"
+        "    os._exit(0)\n"
+        "os.waitpid(pid, 0)\n"
+        "print(os.read(r, 16).decode())\n"
+    )
+    got = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    assert int(got.stdout) == signal.SIGKILL
+
+
 # --- a killed local worker ----------------------------------------------------------------------
 
 def test_a_killed_local_worker_is_one_line_exit_75_and_resume_completes_the_table(tmp_path, reference):

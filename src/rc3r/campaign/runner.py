@@ -215,16 +215,16 @@ def _lost_local(procs) -> str:
     deadline = time.monotonic() + 2.0
     while not any(p.exitcode for p in procs) and time.monotonic() < deadline:
         time.sleep(0.02)
+    codes = [(p.pid, p.exitcode) for p in procs if p.exitcode]
+    if any(code != -signal.SIGTERM for _, code in codes):  # the pool ends the others with SIGTERM itself
+        codes = [(pid, code) for pid, code in codes if code != -signal.SIGTERM]
     dead = []
-    for p in procs:
-        code = p.exitcode
-        if code is None or code == 0:
-            continue
+    for pid, code in codes:
         try:
             how = f"killed by {signal.Signals(-code).name}" if code < 0 else f"exit code {code}"
         except ValueError:
             how = f"exit code {code}"
-        dead.append(f"pid {p.pid}, {how}")
+        dead.append(f"pid {pid}, {how}")
     return (f"a local worker process died ({'; '.join(dead) or 'terminated abruptly'}), perhaps killed or out "
             "of memory; its run was not finished")
 
