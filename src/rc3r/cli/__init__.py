@@ -9,7 +9,7 @@ Exit codes (:data:`EXIT`): 0 success; 1 a check failed (``verify-model`` found t
 model wrong, ``bench`` found a wrong result); 2 bad input (one line
 ``rc3r: error: ...``, never a traceback); 3 a simulation diverged (its data up to
 then is written); 70 an internal error (a bug: one line, ``RC3R_DEBUG=1`` for the
-traceback); 130 interrupted.
+traceback); 75 a campaign lost its workers (``--resume`` continues); 130 interrupted.
 """
 from __future__ import annotations
 
@@ -29,7 +29,8 @@ from ..simulate import ENGINES
 __all__ = ["main", "entry", "build_parser", "EXIT"]
 
 #: Exit codes of every command.
-EXIT = {"ok": 0, "check_failed": 1, "bad_input": 2, "diverged": 3, "internal_error": 70, "interrupted": 130}
+EXIT = {"ok": 0, "check_failed": 1, "bad_input": 2, "diverged": 3, "internal_error": 70, "workers_lost": 75,
+        "interrupted": 130}
 
 
 class _Parser(argparse.ArgumentParser):
