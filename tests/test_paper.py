@@ -38,7 +38,7 @@ def test_run_writes_outputs(tmp_path, capsys):
 def test_diverging_run_exits_3_keeps_data(tmp_path, capsys):
     """The paper's robust law at 1 kHz diverges: one line, exit 3, data up to then on disk."""
     out = tmp_path / "div"
-    code = main(["run", "--controller", "robust", "--perturbed", "--rate", "1000", "--out", str(out)])
+    code = main(["run", "--controller", "robust", "--perturbed", "--rate", "1000", "--eps", "0.5", "--out", str(out)])
     assert code == 3
     line = _one_error_line(capsys)
     assert "diverged at t = " in line

@@ -111,7 +111,7 @@ def test_python_engine_matches_fast_engine_sampled():
 def test_divergence_raises_with_the_result_attached():
     """The paper's robust gains at 1 kHz diverge: raise_for_status raises DivergenceError (exit 3)
     and carries the data up to the divergence."""
-    spec = build_run(controller="robust", perturbed=True, rate=1000.0, duration=1.0)
+    spec = build_run(controller="robust", perturbed=True, rate=1000.0, duration=1.0, eps=0.5)  # given: no rule
     res, _ = execute(spec)
     assert not res.ok
     with pytest.raises(DivergenceError) as e:

@@ -60,7 +60,7 @@ def test_paper_robust_law_verdicts(rate, expect):
     """The paper's robust law (eps 0.5, perturbed): continuous time is clean; sampled at 20 kHz
     (rate x eps = 10 kHz, below the measured 40-50 kHz boundary) it chatters without diverging (from
     about 1.2 s on: the first second is clean, measured)."""
-    spec = rc3r.build_run(controller="robust", perturbed=True, duration=2.0, rate=rate)
+    spec = rc3r.build_run(controller="robust", perturbed=True, duration=2.0, rate=rate, eps=0.5)  # given: no rule
     res, m = rc3r.execute(spec)
     assert res.ok and m["verdict"] == expect
     assert m["tolerance_met"] is True  # max|e| < 1e-3 rad either way: chattering is a torque problem

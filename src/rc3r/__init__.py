@@ -76,6 +76,8 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.export.c``                      the C controller: trajectory, law, state, zero-order hold, delay line
 ``rc3r.export.chain``                  a serial chain's Slotine--Li regressor in C (port of the compiled kernel)
 ``rc3r.export.harness``                recorded states, rc3r's torques, ``check.c`` and the ``Makefile``
+``rc3r.design``                        ``rc3r design``: gains and eps for a controller rate, verified over the bounds
+``rc3r.design.rule``                   the sampled-data rule and its fast form (the defaults of sampled runs)
 ``rc3r.campaign``                      many runs: Monte Carlo over the box, eps sweep, rate map
 ``rc3r.campaign.jobs``                 :class:`Job` (one run, picklable) and :func:`run_job` (its row)
 ``rc3r.campaign.runner``               resumable row-by-row table, local process pool or Dask

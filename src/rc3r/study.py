@@ -390,7 +390,6 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
             _model(LAWS[kind], the_plant, box_bounds, False, model_cfg)
     else:
         model = _model(LAWS[kind], the_plant, box_bounds, perturbed, model_cfg)
-    law = _law(kind, model, ctrl_cfg, eps, dict(cfg.get("gains", {}).get(kind, {})))
     traj_cfg = dict(cfg.get("trajectory", {}))
     traj = trajectory_from_config(traj_cfg, nominal.default_trajectory())
     warnings = []
@@ -420,6 +419,16 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
                                   torque_limit=torque_limit, noise=noise, delay=delay, plant_engine=plant_engine)
     if loop is not None and loop.active and opts.rate is None:
         raise ConfigError("sensor noise, quantization and delay act on a sampled controller: give a rate (--rate HZ)")
+    table = dict(cfg.get("gains", {}).get(kind, {}))
+    if opts.rate is not None and eps is None and not table and set(ctrl_cfg) <= {"kind"}:
+        # defaults that work: no gain given for a sampled run -> the sampled-data rule's (docs/design.md)
+        from .design.rule import sampled_gains
+
+        table, note = sampled_gains(kind, nominal, traj, model, opts.rate, duration=opts.duration,
+                                    delay=0 if loop is None else int(loop.delay))
+        if note is not None:
+            model = {**model, "gains_source": note}
+    law = _law(kind, model, ctrl_cfg, eps, table or {})
     return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings),
                    true_plant, loop, nominal, tolerance if tolerance is not None else cfg.get("tolerance"))
 

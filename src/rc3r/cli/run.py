@@ -151,7 +151,9 @@ def cmd_run(args) -> int:
     try:
         res.raise_for_status()
     except DivergenceError as exc:
-        raise DivergenceError(f"{exc}; data up to then written to {out}/") from None
+        rate = "HZ" if spec.options.rate is None else f"{spec.options.rate:g}"
+        raise DivergenceError(f"{exc}; data up to then written to {out}/; gains and eps verified for your "
+                              f"controller rate: rc3r design --rate {rate} (docs/design.md)") from None
     return EXIT["ok"]
 
 

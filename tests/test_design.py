@@ -1,0 +1,164 @@
+"""The sampled-data rule (rc3r.design.rule), the defaults it gives sampled runs, and ``rc3r design``."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import rc3r
+from rc3r.cli import main
+from rc3r.design.rule import Spectrum, check, eps_boundary, fast_design, real_limit, sampled_gains, \
+    spectrum, stability_limit
+from rc3r.errors import ParameterError
+
+
+# ---- the held loop's limits, against numpy's roots ------------------------------------------------
+
+def _max_root(a: float, d: int) -> np.ndarray:
+    """Roots of z^(d+1) - z^d + a (the mode r_{k+1} = r_k - a r_{k-d})."""
+    return np.roots([1.0, -1.0] + [0.0] * (d - 1) + [a]) if d else np.roots([1.0, -1.0 + a])
+
+
+@pytest.mark.parametrize("d", [0, 1, 2, 3])
+def test_stability_limit_is_where_a_root_leaves_the_unit_circle(d):
+    """Just below the limit every root is inside the unit circle, just above one is outside (numpy.roots);
+    d = 0, 1 by hand: 2 and 1."""
+    c = stability_limit(d)
+    assert np.abs(_max_root(c * (1 - 1e-6), d)).max() < 1 < np.abs(_max_root(c * (1 + 1e-6), d)).max()
+    if d < 2:
+        assert c == pytest.approx((2.0, 1.0)[d], rel=1e-15)
+
+
+@pytest.mark.parametrize("d", [0, 1, 2])
+def test_real_limit_is_where_the_roots_stop_being_real_and_positive(d):
+    """Below d^d/(d+1)^(d+1) (1, 1/4, 4/27) the slowest mode (the roots of largest modulus) is real and
+    positive: it neither alternates nor rings at the sampling rate; above it it is a complex pair (d >= 1)
+    or negative (d = 0)."""
+    a = real_limit(d)
+    assert a == pytest.approx((1.0, 0.25, 4.0 / 27.0)[d], rel=1e-15)
+    for scale, dominant_real_positive in ((1 - 1e-4, True), (1 + 1e-4, False)):
+        z = _max_root(a * scale, d)
+        top = z[np.abs(z) >= np.abs(z).max() - 1e-3]
+        assert bool(np.all(np.abs(top.imag) < 1e-6) and np.all(top.real > 0)) is dominant_real_positive
+
+
+def _hand_spectrum(m=(2.0, 0.5), Y=((1.0, 0.0), (0.0, 1.0))):
+    """A constant model: M = diag(m), Y constant (n = p = 2), sampled at two instants."""
+    m = np.asarray(m)
+    Li = np.diag(1 / np.sqrt(m))
+    Y = np.asarray(Y)
+    return Spectrum(np.array([0.0, 1.0]), np.array([Li, Li]), np.array([Y, Y]), m.copy(), "free",
+                    float(m.min()), float(m.max()), 1 / m)
+
+
+def test_fast_form_against_a_hand_computed_case():
+    """M = diag(2, 0.5), Y = I, rho = 10, 1 kHz, no delay. By hand: L_Y = max(1/2, 1/0.5) = 2,
+    kappa = (2, 0.5), lambda(M^-1 diag kappa) = 1, so b = min(1000/20, 125, 0.25/(1e-3 * 1)) = 50,
+    K = (100, 25), L_K = 50, Lambda = 50/2.5 = 20; eps = T rho L_Y / (1 - T L_K) = 0.02/0.95;
+    the stability boundary T rho L_Y / (2 - T L_K) = 0.02/1.95; FBL Kp = 400, Kd = 40;
+    Gamma = min(10, 0.95 * 50 / (1e-3 * 2)) = 10; eq. 7 with rho_i = (3, 4): L = max(3/2, 4/0.5) = 8."""
+    sp = _hand_spectrum()
+    d = fast_design(sp, 1000.0, rho=10.0, rho_i=[3.0, 4.0])
+    assert d.L_Y == pytest.approx(2.0, rel=1e-12) and d.bandwidth == pytest.approx(50.0, rel=1e-12)
+    np.testing.assert_allclose(d.K, [100.0, 25.0], rtol=1e-12)
+    assert d.Lambda == pytest.approx(20.0) and d.L_K == pytest.approx(50.0, rel=1e-12)
+    assert d.eps == pytest.approx(0.02 / 0.95, rel=1e-12)
+    assert d.eps_stable == pytest.approx(0.02 / 1.95, rel=1e-12)
+    assert d.eps_i == pytest.approx(1e-3 * 8.0 / 0.95, rel=1e-12)
+    assert d.fbl == {"Kp": pytest.approx(400.0), "Kd": pytest.approx(40.0)}
+    assert d.Gamma == 10.0
+    # the design passes its own check exactly at the target (figure 1), the stability edge fails it
+    law = rc3r.make_law("robust", np.zeros(2), rho=10.0, **d.gains("robust"))
+    assert check(law, sp, 1000.0) == pytest.approx(1.0, rel=1e-12)
+    edge = rc3r.make_law("robust", np.zeros(2), rho=10.0, K=d.K, Lambda=20.0, eps=d.eps_stable)
+    assert check(edge, sp, 1000.0) == pytest.approx(2.0, rel=1e-12)  # = stability_limit(0) / real_limit(0)
+    assert eps_boundary(sp, 1000.0, 10.0, d.K) == pytest.approx(d.eps_stable, rel=1e-12)
+
+
+def test_delay_and_margin_shrink_the_budget():
+    """One sample of delay: the target is 1/4 instead of 1 (T L_K <= 1/16 -> b = 62.5 capped to 50,
+    eps = T rho L_Y / (1/4 - T L_K) = 0.02 / 0.2); a margin of 2 asks the same at half the rate."""
+    sp = _hand_spectrum()
+    d1 = fast_design(sp, 1000.0, rho=10.0, delay=1)
+    assert d1.bandwidth == pytest.approx(50.0) and d1.eps == pytest.approx(0.02 / 0.2, rel=1e-12)
+    # margin 2: the budget at T' = 2 ms (b stays 50 = rate/20): eps = T' rho L_Y / (1 - T' L_K) = 0.04 / 0.9
+    assert fast_design(sp, 1000.0, rho=10.0, margin=2.0).eps == pytest.approx(0.04 / 0.9, rel=1e-12)
+    for bad in (dict(delay=-1), dict(delay=0.5), dict(margin=0.5), dict(margin=float("nan"))):
+        with pytest.raises(ParameterError):
+            fast_design(sp, 1000.0, rho=10.0, **bad)
+    with pytest.raises(ParameterError):
+        fast_design(sp, 0.0, rho=10.0)
+
+
+def test_spectrum_of_a_real_arm_equals_a_direct_evaluation():
+    """spectrum() on the UR5 equals lambda_max(M^-1 Y Y^T) evaluated directly with numpy (eigvals of the
+    unsymmetrized product) at the same instants; kappa = 1/(M^-1(q_d(0)))_ii."""
+    ur5 = rc3r.load_robot("ur5")
+    traj = ur5.default_trajectory()
+    sp = spectrum(ur5, traj, 2.0, samples=5)
+    direct = []
+    for t in sp.t:
+        q, qd, qdd = traj.evaluate(t)
+        Y = ur5.regressor(q, qd, qd, qdd)
+        direct.append(np.max(np.linalg.eigvals(np.linalg.solve(ur5.mass_matrix(q), Y @ Y.T)).real))
+    assert sp.lam_yy() == pytest.approx(max(direct), rel=1e-9)
+    np.testing.assert_allclose(sp.kappa, 1 / np.diag(np.linalg.inv(ur5.mass_matrix(traj.evaluate(0.0)[0]))),
+                               rtol=1e-12)
+
+
+# ---- defaults that work ----------------------------------------------------------------------------
+
+UR5_PAYLOAD = dict(robot="ur5", controller="robust", perturbed=True, payload=(0.0, 5.0), rate=1000.0)
+
+
+def test_default_ur5_robust_at_1khz_is_clean_where_the_old_defaults_diverged():
+    """The issue's case: UR5, unknown 0..5 kg payload (plant 5 kg), robust law at 1 kHz with no gain given.
+    The old defaults (K = 100, Lambda = 50, eps = 0.5, passed explicitly) diverge within 10 ms (measured
+    8 ms); without gains build_run takes the rule's fast form and the run is clean over 1.5 s."""
+    old = rc3r.build_run(**UR5_PAYLOAD, duration=1.5, config={"gains": {"robust": {"K": 100.0, "Lambda": 50.0,
+                                                                                    "eps": 0.5}}})
+    res_old, m_old = rc3r.execute(old)
+    assert m_old["verdict"] == "diverged" and res_old.t_end < 0.05
+    new = rc3r.build_run(**UR5_PAYLOAD, duration=1.5)
+    res, m = rc3r.execute(new)
+    assert res.ok and m["verdict"] == "clean", m["verdict"]
+    assert "sampled-data rule" in new.model["gains_source"]
+    assert new.law.eps > 0.5 and new.law.K[-1] < 1.0  # the wrist (M_66 ~ 0.017 kg m^2) gets its own K
+    # the rule rejects the old gains and accepts its own (the check the hook applies)
+    sp = spectrum(new.robot_model, new.trajectory, 1.5)
+    assert check(old.law, sp, 1000.0) > 1.0 >= check(new.law, sp, 1000.0) - 1e-12
+
+
+def test_given_gains_and_continuous_runs_are_left_alone():
+    """--eps, a [gains.<law>] or [controller] gain, or continuous time: the law's gains are the user's or
+    the defaults, untouched (and the paper's own scenarios, which pass the paper's gains, keep them)."""
+    from rc3r.experiments.paper3r import scenarios
+
+    assert rc3r.build_run(**UR5_PAYLOAD, duration=0.1, eps=0.5).law.K == pytest.approx(100.0)
+    spec = rc3r.build_run(**UR5_PAYLOAD, duration=0.1, config={"controller": {"Lambda": 30.0}})
+    assert spec.law.eps == 0.5 and "gains_source" not in spec.model
+    cont = rc3r.build_run(**{**UR5_PAYLOAD, "rate": None}, duration=0.1)
+    assert cont.law.eps == 0.5 and "gains_source" not in cont.model
+    for s in scenarios(duration=0.1, rate=1000.0):
+        if s.name.startswith("robust"):
+            assert s.law.eps in (0.5, 0.05) and s.law.K == pytest.approx(100.0) and "gains_source" not in s.model
+
+
+def test_fbl_defaults_pass_the_rule_and_stay():
+    """FBL's Kp = Kd = 100 (fastest pole 99 1/s, T * 99 = 0.099 <= 1 at 1 kHz) pass the check: kept."""
+    spec = rc3r.build_run(**{**UR5_PAYLOAD, "controller": "fbl"}, duration=0.1)
+    assert spec.law.Kp == pytest.approx(100.0) and spec.law.Kd == pytest.approx(100.0)
+    assert spec.model["gains_source"].startswith("default gains")
+    gains, note = sampled_gains("robust-ellipsoid", spec.robot_model, spec.trajectory, spec.model, 1000.0)
+    assert gains is None and note is None
+
+
+def test_a_diverged_run_names_rc3r_design(tmp_path, capsys):
+    """The old gains, given explicitly, still diverge at 1 kHz (exit 3): the one error line says what to run."""
+    code = main(["run", "--robot", "ur5", "--payload", "0:5", "--controller", "robust", "--rate", "1000", "--eps",
+                 "0.5", "--duration", "0.1", "--out", str(tmp_path / "d")])
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.startswith("rc3r: error:")]
+    assert code == 3 and len(lines) == 1 and "rc3r design --rate 1000" in lines[0]
+    assert json.loads((tmp_path / "d" / "metrics.json").read_text())["status"] == "diverged"
