@@ -58,7 +58,9 @@ def main(duration: float = 2.0) -> dict:
         return rc3r.build_run(controller="robust-coeff", perturbed=True, rate=1000.0, duration=duration,
                               eps=eps, config={"model": {"theta": "certified"}})
 
-    fair, default = spec(EPS), spec()
+    # the law's own default eps_i (0.5), given explicitly: without it a sampled run takes the sampled-data
+    # rule's gains (docs/design.md)
+    fair, default = spec(EPS), spec(rc3r.controllers.default_gains("robust-coeff")["eps_i"])
     law = rc3r.make_law("tanh-robust", fair.model["theta0"], rho_i=fair.model["rho_i"], eps=EPS)
     opts = rc3r.SimOptions(duration=duration, rate=1000.0)
     runs = {

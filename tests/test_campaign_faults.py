@@ -320,4 +320,11 @@ def test_a_dask_cluster_without_workers_stops_with_one_line_and_resume_completes
     assert _procs(lambda pid, ppid, pgrp: pgrp in {p.pid for p in servers}) == []
     _resume_and_compare(out, reference)
     # no child of this process left (a busy machine may take seconds to reap a finished pool's workers)
-    assert _wait_gone(_procs(lambda pid, ppid, pgrp: ppid == os.getpid()), 15.0) == []
+    def ours(pid, ppid, pgrp):  # a child of this test process that runs rc3r or dask (what the test started)
+        try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
+        except OSError:
+            return False
+        return ppid == os.getpid() and (b"rc3r" in cmd or b"dask" in cmd or b"distributed" in cmd)
+
+    assert _wait_gone(_procs(ours), 15.0) == []
