@@ -103,26 +103,23 @@ def _urdf_or_number(text):
     return x
 
 
-def _friction(text):
-    if text == "urdf":
-        return text
+def _two_nonnegative(text, form: str) -> str:
+    """``A:B`` with finite A, B >= 0, normalised to ``repr(A):repr(B)``; ``form`` names it in the error."""
     try:
-        fv, fc = (float(x) for x in text.split(":"))
+        a, b = (float(x) for x in text.split(":"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'urdf' or VISCOUS:COULOMB, got {text!r}") from None
-    if not (math.isfinite(fv) and math.isfinite(fc) and fv >= 0 and fc >= 0):
-        raise argparse.ArgumentTypeError(f"expected finite VISCOUS:COULOMB >= 0, got {text!r}")
-    return f"{fv!r}:{fc!r}"
+        raise argparse.ArgumentTypeError(f"expected {form}, got {text!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b) and a >= 0 and b >= 0):
+        raise argparse.ArgumentTypeError(f"expected finite {form.split(' or ')[-1]} >= 0, got {text!r}")
+    return f"{a!r}:{b!r}"
+
+
+def _friction(text):
+    return text if text == "urdf" else _two_nonnegative(text, "'urdf' or VISCOUS:COULOMB")
 
 
 def _noise(text):
-    try:
-        sq, sqd = (float(x) for x in text.split(":"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected SIGMA_Q:SIGMA_QD, got {text!r}") from None
-    if not (math.isfinite(sq) and math.isfinite(sqd) and sq >= 0 and sqd >= 0):
-        raise argparse.ArgumentTypeError(f"expected finite SIGMA_Q:SIGMA_QD >= 0, got {text!r}")
-    return f"{sq!r}:{sqd!r}"
+    return _two_nonnegative(text, "SIGMA_Q:SIGMA_QD")
 
 
 def plant_args(p, robot_help: bool = True) -> None:

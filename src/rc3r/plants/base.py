@@ -41,7 +41,21 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["Effect", "Plant", "EFFECTS", "register_effect", "as_plant"]
+__all__ = ["Effect", "Plant", "EFFECTS", "register_effect", "as_plant", "per_joint"]
+
+
+def per_joint(name, x, n, signed=False) -> np.ndarray:
+    """``x`` as n finite numbers (one number broadcast), ``>= 0`` unless ``signed``; ConfigError naming ``name``."""
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be numbers, got {x!r}") from None
+    if arr.ndim == 0:
+        arr = np.full(n, float(arr))
+    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or (not signed and np.any(arr < 0)):
+        raise ConfigError(f"{name} must be {n} finite numbers{'' if signed else ' >= 0'} (or one), "
+                          f"got {np.ravel(arr).tolist()}")
+    return arr
 
 
 class Effect:

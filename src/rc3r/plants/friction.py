@@ -19,21 +19,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ConfigError
-from .base import Effect, register_effect
+from .base import Effect, per_joint, register_effect
 
 __all__ = ["Friction"]
 
 
 def _vector(name, x, n) -> np.ndarray:
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"friction {name} must be numbers, got {x!r}") from None
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise ConfigError(f"friction {name} must be {n} finite numbers >= 0 (or one), got {np.ravel(arr).tolist()}")
-    return arr
+    return per_joint(f"friction {name}", x, n)
 
 
 @register_effect

@@ -26,21 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
+from .base import per_joint as _vec
 
 __all__ = ["LoopEffects"]
-
-
-def _vec(name, x, n, signed=False) -> np.ndarray:
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be numbers, got {x!r}") from None
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)) or (not signed and np.any(arr < 0)):
-        raise ConfigError(f"{name} must be {n} finite numbers{'' if signed else ' >= 0'} (or one), "
-                          f"got {np.ravel(arr).tolist()}")
-    return arr
 
 
 @dataclass(frozen=True)
