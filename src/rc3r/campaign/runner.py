@@ -34,6 +34,8 @@ table in job order.
 """
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import csv
 import io
 import logging
@@ -57,6 +59,9 @@ DASK_GRACE_S = 60.0
 PARENT_POLL_S = 0.5
 #: Period [s] of the driver's checks on a Dask cluster while no run finishes.
 _DASK_POLL_S = 1.0
+#: What a bounded wait on Dask raises: one class from Python 3.11 on, three distinct ones on 3.10
+#: (``distributed.wait`` raises asyncio's, ``Future.result`` concurrent.futures').
+_TIMEOUTS = (TimeoutError, asyncio.TimeoutError, concurrent.futures.TimeoutError)
 
 
 def format_value(v) -> str:
@@ -301,7 +306,7 @@ def _dask(jobs, scheduler: str, grace: float):
         raise ConfigError("--scheduler needs dask.distributed: pip install 'rc3r[dask]'") from None
     try:
         client = Client(scheduler, timeout="10s")
-    except (OSError, TimeoutError) as exc:
+    except (OSError, *_TIMEOUTS) as exc:
         raise ConfigError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
     _quiet_abandoned_gathers(client)
     quiet = _NoGatherWarning()
@@ -315,13 +320,13 @@ def _dask(jobs, scheduler: str, grace: float):
                 try:
                     finished, pending = wait(pending, timeout=_DASK_POLL_S, return_when="FIRST_COMPLETED")
                     pending = set(pending)
-                except TimeoutError:
+                except _TIMEOUTS:
                     finished = ()
                 progressed = False
                 for fut in finished:
                     try:  # bounded: a result held by a worker that has died is gathered forever
                         result = fut.result(timeout=_DASK_POLL_S)
-                    except TimeoutError:
+                    except _TIMEOUTS:
                         pending.add(fut)  # Dask computes it again (on a worker, if it has one)
                         continue
                     except KilledWorker as exc:
