@@ -162,3 +162,76 @@ def test_a_diverged_run_names_rc3r_design(tmp_path, capsys):
     lines = [ln for ln in err.splitlines() if ln.startswith("rc3r: error:")]
     assert code == 3 and len(lines) == 1 and "rc3r design --rate 1000" in lines[0]
     assert json.loads((tmp_path / "d" / "metrics.json").read_text())["status"] == "diverged"
+
+
+# ---- rc3r design ------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def ur5_design(tmp_path_factory):
+    """A small design: UR5, 0..3 kg, 1 kHz, the two ends of the payload only (--n 0), 1 s runs, in-process."""
+    out = tmp_path_factory.mktemp("design") / "ur5"
+    code = main(["design", "--robot", "ur5", "--payload", "0:3", "--rate", "1000", "--n", "0", "--duration", "1",
+                 "--workers", "1", "--out", str(out)])
+    return code, out
+
+
+def test_small_design_on_the_ur5_is_clean_everywhere_it_was_verified(ur5_design):
+    """Exit 0; the chosen eps is the smallest clean one tried, and every run of it (both payload ends, at 1 kHz
+    and at 500 Hz) is clean in runs.csv (read back independently); a smaller eps tried was not clean."""
+    from rc3r.campaign import read_rows
+
+    code, out = ur5_design
+    assert code == 0
+    info = json.loads((out / "design.json").read_text())
+    eps = info["eps"]
+    rows = read_rows(out / "runs.csv")
+    chosen = [r for r in rows if r["controller"] == "robust" and r["eps"] == eps
+              and r["rate_hz"] in (1000.0, 500.0)]
+    assert len(chosen) == 4 and all(r["verdict"] == "clean" for r in chosen)
+    tried = sorted({r["eps"] for r in rows if r["controller"] == "robust" and r["rate_hz"] in (1000.0, 500.0)})
+    assert tried[0] < eps  # the search went below and found the boundary
+    smaller = [e for e in tried if e < eps]
+    assert all(any(r["verdict"] != "clean" for r in rows if r["controller"] == "robust" and r["eps"] == e
+                   and r["rate_hz"] in (1000.0, 500.0)) for e in smaller)
+    md = (out / "design.md").read_text()
+    assert "predicted ultimate bound" in md and "torque peaks" in md and "lowest rate" in md
+    assert (out / "design.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_design_toml_round_trips_through_rc3r_run(ur5_design, tmp_path):
+    """rc3r run --config design.toml runs the designed gains (metrics.json's gains = design.toml's) and is clean;
+    the same file drives FBL and robust-coeff."""
+    from rc3r.io import read_toml
+
+    _, out = ur5_design
+    toml = read_toml(out / "design.toml", "design")
+    for law in ("robust", "fbl", "robust-coeff"):
+        run = tmp_path / law
+        assert main(["run", "--config", str(out / "design.toml"), "--controller", law, "--out", str(run)]) == 0
+        m = json.loads((run / "metrics.json").read_text())
+        assert m["mode"] == "sampled" and m["rate_hz"] == 1000.0 and m["verdict"] == "clean"
+        used = {**m["gains"], **({"eps": m["eps"]} if m.get("eps") is not None else {})}
+        for key, value in toml["gains"][law].items():
+            got = used.get(key, used.get("eps") if key == "eps_i" else None)
+            np.testing.assert_allclose(got, value, rtol=0, atol=0)
+        assert "gains_source" not in m["model"]
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--payload", "0:3", "--box", "b.toml"], "one of --payload, --box, --bounds"),
+    (["--payload", "0:3", "--margin", "0.5"], "--margin"),
+    (["--payload", "0:3", "--workers", "1", "--scheduler", "tcp://127.0.0.1:1"], "not both"),
+    (["--payload-com", "0,0,0.1"], "--payload"),
+    (["--payload", "0:3", "--config", "{gains}"], "chooses the gains"),
+    ([], "--rate"),
+])
+def test_bad_design_input_is_one_line_and_writes_nothing(tmp_path, capsys, argv, needle):
+    cfg = tmp_path / "g.toml"
+    cfg.write_text("[gains.robust]\neps = 5.0\n")
+    argv = [str(cfg) if a == "{gains}" else a for a in argv]
+    rate = [] if not argv else ["--rate", "1000"]
+    out = tmp_path / "o"
+    code = main(["design", "--robot", "ur5", *rate, *argv, "--n", "0", "--duration", "0.1", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and err.startswith("rc3r: error:") and needle in err, err
+    assert not out.exists()

@@ -78,6 +78,8 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.export.harness``                recorded states, rc3r's torques, ``check.c`` and the ``Makefile``
 ``rc3r.design``                        ``rc3r design``: gains and eps for a controller rate, verified over the bounds
 ``rc3r.design.rule``                   the sampled-data rule and its fast form (the defaults of sampled runs)
+``rc3r.design.verify``                 the fast form verified over the bounds at the rate and rate / margin (campaign runner)
+``rc3r.design.report``                 ``design.toml``, ``design.md``, the figure
 ``rc3r.campaign``                      many runs: Monte Carlo over the box, eps sweep, rate map
 ``rc3r.campaign.jobs``                 :class:`Job` (one run, picklable) and :func:`run_job` (its row)
 ``rc3r.campaign.runner``               resumable row-by-row table, local process pool or Dask
@@ -102,6 +104,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.cli.bench``                     ``bench``
 ``rc3r.cli.export``                    ``export``
 ``rc3r.cli.identify``                  ``identify``, ``excite``
+``rc3r.cli.design``                    ``design``
 ``rc3r.cli._output``                   output directories written as a whole, locked
 =====================================  ==============================================================
 

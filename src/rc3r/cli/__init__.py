@@ -269,6 +269,7 @@ def build_parser() -> argparse.ArgumentParser:
     be.add_argument("--quick", action="store_true", help="tiny sizes (CI: correctness only)")
     importlib.import_module(".identify", __package__).add_parsers(sub, _positive, _lock)  # identify, excite
     importlib.import_module(".export", __package__).add_parser(sub)  # export
+    importlib.import_module(".design", __package__).add_parser(sub)  # design
     return p
 
 
@@ -285,6 +286,7 @@ _COMMANDS = {
     "identify": ("identify", "cmd_identify"),
     "excite": ("identify", "cmd_excite"),
     "export": ("export", "cmd_export"),
+    "design": ("design", "cmd_design"),
 }
 
 

@@ -283,7 +283,7 @@ def fast_design(spec: Spectrum, rate: float, *, rho: float, rho_i=None, delay: i
     omega = min(lam, K_SHARE * a / (2.0 * Tm))  # FBL: T' Kd = 2 T' omega <= a/4 at most
     fbl = {"Kp": float(omega ** 2), "Kd": float(2.0 * omega)}
     w_pd = min(lam, K_SHARE * a / (2.0 * Tm * l_kappa))
-    pd = {"Kp": w_pd ** 2 * spec.kappa, "Kd": 2.0 * w_pd * spec.kappa}
+    pd = {"Kp": (w_pd ** 2 * spec.kappa).tolist(), "Kd": (2.0 * w_pd * spec.kappa).tolist()}
     return Design(rate, d, margin, lam, float(b), K, float(eps), None if eps_i is None else float(eps_i),
                   float(gamma), fbl, pd, float(rho), L_Y, float(L_K),
                   eps_boundary(spec, rate, rho, K, d), spec.kappa.copy(), spec.scaling)

@@ -1,0 +1,150 @@
+"""``rc3r design``: gains and eps for a controller rate, verified over the bounds (docs/design.md).
+
+Writes into ``--out`` (as a whole, :mod:`rc3r.cli._output`): ``design.toml`` (a configuration for
+``rc3r run --config`` and ``rc3r montecarlo --config``), ``design.md``, ``design.json``,
+``design.png`` and ``runs.csv`` (every verification run, the rows of ``rc3r montecarlo``).
+Exit 0 when a clean eps was found at the rate and at rate / margin on every plant, 1 when none was
+(the files are written with the fast form's gains and say so), 2 on bad input (nothing written).
+"""
+from __future__ import annotations
+
+import shlex
+import sys
+import time
+
+from ..errors import ConfigError
+from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
+from ..provenance import provenance
+from . import EXIT
+from ._output import check_output_path, output_dir
+
+#: What ``rc3r design`` writes in its directory (replaced by a rerun; other entries are kept).
+DESIGN_ENTRIES = ("design.toml", "design.md", "design.json", "design.png", "runs.csv")
+
+
+def add_parser(sub) -> None:
+    """The ``design`` subcommand's options (called by :func:`rc3r.cli.build_parser`)."""
+    from ..robots import ROBOTS
+    from . import _interval, _positive, _vector3, plant_args
+
+    d = sub.add_parser("design", help="gains and eps for a controller rate, verified over the bounds")
+    d.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default: config, else rr3)")
+    d.add_argument("--payload", type=_interval, metavar="LO:HI",
+                   help="unknown payload mass on the last link [kg]: verified on both ends and --n random masses")
+    d.add_argument("--payload-com", type=_vector3, metavar="X,Y,Z",
+                   help="payload CoM in the last joint's frame [m] (default 0,0,0)")
+    d.add_argument("--box", help="box TOML: verified on the nominal robot and --n random plants of the box")
+    d.add_argument("--bounds", metavar="FILE", help="bounds.toml of rc3r identify (verified on the nominal robot)")
+    d.add_argument("--rate", type=_positive(), required=True, help="controller rate [Hz]")
+    d.add_argument("--config", help="TOML with the trajectory, plant effects, bounds (no gains: they are designed)")
+    d.add_argument("--margin", type=_margin, default=2.0,
+                   help="the design must also be clean at rate / MARGIN (default 2; 1: at the rate only)")
+    d.add_argument("--n", type=_positive(int, allow_zero=True), default=50,
+                   help="random plants besides the payload's ends or the nominal robot (default 50)")
+    d.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="seed of the random plants")
+    d.add_argument("--duration", type=_positive(), help="simulated time per run [s] (default: config, else 10)")
+    d.add_argument("--workers", type=_positive(int), help="local worker processes (default: all cores)")
+    d.add_argument("--scheduler", help="address of a Dask scheduler (tcp://HOST:PORT) instead of local workers")
+    d.add_argument("--out", required=True, help="output directory (written as a whole)")
+    d.add_argument("--force", action="store_true", help="replace an earlier design in --out")
+    plant_args(d)
+
+
+def _margin(text):
+    import argparse
+    import math
+
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(x) and x >= 1):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 1, got {text}")
+    return x
+
+
+class _Bar:
+    """A tqdm bar whose total grows with each batch of runs."""
+
+    def __init__(self):
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=0, desc="design", unit="run", file=sys.stderr, dynamic_ncols=True, disable=None,
+                        mininterval=0.5)
+
+    def __call__(self, what, count):
+        if what is not None:
+            self.bar.total += count
+            self.bar.set_description(what)
+            self.bar.refresh()
+        else:
+            self.bar.update(count)
+
+    def close(self):
+        self.bar.close()
+
+
+def cmd_design(args) -> int:
+    """``rc3r design``: the rule, the verification, the files (module docstring)."""
+    from ..campaign import RunTable, columns
+    from ..design.report import design_figure, design_markdown, design_toml
+    from ..design.verify import design_config, verify_design
+    from ..study import build_run
+    from .run import announce_compile, plant_options
+
+    if args.scheduler is not None and args.workers is not None:
+        raise ConfigError("give --workers or --scheduler, not both")
+    if args.payload_com is not None and args.payload is None:
+        raise ConfigError("--payload-com needs --payload LO:HI")
+    cfg = {} if args.config is None else read_toml(args.config, "config file")
+    opts = plant_options(args)
+    cfg = design_config(cfg, robot=args.robot, urdf=opts["urdf"], lock=opts["lock"], payload=args.payload,
+                        payload_com=args.payload_com, box=args.box, bounds=args.bounds, friction=opts["friction"],
+                        torque_limit=opts["torque_limit"], noise=opts["noise"], delay=opts["delay"],
+                        duration=args.duration, tolerance=opts["tolerance"])
+    if opts.get("plant_engine"):
+        cfg.setdefault("plant", {})["engine"] = opts["plant_engine"]
+    first = build_run(controller="robust", config=cfg, rate=args.rate, eps=1.0)  # bad input refused here
+    out = check_output_path(args.out)
+    if out.is_dir() and any(out.iterdir()) and not args.force:
+        raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
+    command = "rc3r " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:2] == ["design"] else ""
+    where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
+    print(f"rc3r design: {first.plant.n}-joint arm '{first.robot_model.label}', {args.rate:g} Hz (margin "
+          f"{args.margin:g}), {args.n} random plants, {first.options.duration:g} s each, on {where} -> {out}/",
+          file=sys.stderr)
+    announce_compile(first.plant)
+    t0 = time.perf_counter()
+    with output_dir(out, own=DESIGN_ENTRIES) as tmp:
+        bar = _Bar()
+        try:
+            with RunTable(tmp / "runs.csv", columns(first.plant.n)).open(resume=False) as table:
+                res = verify_design(cfg, float(args.rate), table=table, margin=args.margin, n=args.n,
+                                    seed=args.seed, workers=args.workers, scheduler=args.scheduler, progress=bar)
+        finally:
+            bar.close()
+        wall = time.perf_counter() - t0
+        info = res.describe()
+        info.update({"wall_s": wall, "command": command, "provenance": provenance(config=cfg, seed=args.seed)})
+        atomic_write_text(tmp / "design.toml", design_toml(res, f"made by: {command}" if command else ""))
+        atomic_write_text(tmp / "design.md", design_markdown(res, command))
+        atomic_write_json(tmp / "design.json", info)
+        atomic_savefig(design_figure(res), tmp / "design.png", dpi=110)
+    g = res.gains()["robust"]
+    fbl = res.baselines.get("fbl", {}).get("worst_error")
+    ch = res.chosen
+    worst = None if ch is None else ch["at_rate"]["worst_error"]
+    word = "clean" if res.ok else "NOT clean"
+    low = res.lowest_clean_rate()
+    def num(x, fmt=".3g"):
+        return "-" if x is None else format(x, fmt)
+
+    ks = ", ".join(format(k, ".3g") for k in g["K"])
+    print(f"{word}: eps = {g['eps']:.4g} (rule: {res.design.eps:.4g}, stability boundary {res.design.eps_stable:.4g}), "
+          f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad (FBL {num(fbl)}); lowest clean "
+          f"rate {num(low, '.4g')} Hz; {len(res.levels)} eps tried, wall {wall:.1f} s -> {out}/")
+    if not res.ok:
+        print(f"rc3r design: no eps tried was clean on every plant at {args.rate:g} and {args.rate / args.margin:g} Hz; "
+              f"{out}/design.toml has the rule's gains, unverified (see design.md)", file=sys.stderr)
+        return EXIT["check_failed"]
+    return EXIT["ok"]

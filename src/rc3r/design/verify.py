@@ -1,0 +1,329 @@
+r"""The rule's fast form verified by simulation over the bounds, at the rate and at rate / margin.
+
+:func:`verify_design` takes a run configuration (the arm, its bounds, the plant effects, the
+trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
+
+1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's model;
+2. runs the robust law with it on the plants of the bounds -- for a payload the lightest and the
+   heaviest end and ``n`` seeded random masses, for a box its nominal robot and ``n`` seeded random
+   plants (``random:<plant_seed(seed, k)>``, as ``rc3r montecarlo``), for an identification's
+   bounds the nominal robot -- at the rate and at rate / margin, as campaign jobs
+   (:func:`rc3r.campaign.runner.run_many`: a local pool or a Dask scheduler);
+3. starts from the fast form's eps for rate / margin (:func:`start_eps`), tightens eps by halves
+   while every run is ``clean``, or backs off by doubling while one chatters, saturates, leaves the
+   joint limits or diverges (at most ``steps`` times), then bisects the bracket once (geometric
+   mean); the smallest clean eps is the design;
+4. runs the baselines and the other laws once on the same plants at the rate: FBL with the rule's
+   Kp, Kd, eq. (7) with eps_i scaled like eps (the fast form's eps_i if that is not clean),
+   the adaptive law with the rule's Gamma;
+5. runs the design at rates below rate / margin (steps of sqrt(2), on the first four plants) to find
+   the lowest rate at which it stays clean.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConfigError
+from .rule import fast_design, spectrum
+
+__all__ = ["DesignResult", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
+
+
+def design_config(config: dict | None = None, **options) -> dict:
+    """The run configuration a design is made for: ``config`` (a ``--config`` table) with the command
+    line's ``options`` written into it (``robot``, ``urdf``, ``lock``, ``payload`` (lo, hi), ``payload_com``,
+    ``box``, ``bounds``, ``friction``, ``torque_limit``, ``noise``, ``delay``, ``duration``, ``tolerance``).
+
+    Gains are what a design chooses: a config with ``[gains]`` or ``[controller]`` gains is refused.
+    """
+    cfg = copy.deepcopy(config or {})
+    ctrl = cfg.get("controller", {})
+    if cfg.get("gains") or (isinstance(ctrl, dict) and set(ctrl) - {"kind"}):
+        raise ConfigError("rc3r design chooses the gains: remove [gains] and the gains of [controller] from --config")
+    cfg.pop("controller", None)
+    cfg.pop("gains", None)
+    given = [k for k in ("payload", "box", "bounds") if options.get(k) is not None]
+    if len(given) > 1:
+        raise ConfigError(f"give one of --payload, --box, --bounds, not {' and '.join('--' + k for k in given)}")
+    if options.get("robot") is not None and options.get("urdf") is not None:
+        raise ConfigError("give --robot NAME or --urdf PATH, not both")
+    for key in ("robot", "urdf", "box", "bounds", "tolerance"):
+        if options.get(key) is not None:
+            cfg[key] = options[key] if key == "tolerance" else str(options[key])
+    if options.get("urdf") is not None:
+        cfg.pop("robot", None)
+    if options.get("lock"):
+        cfg["lock"] = {str(k): float(v) for k, v in dict(options["lock"]).items()}
+    if options.get("payload") is not None:
+        lo, hi = options["payload"]
+        cfg["payload"] = {"mass": [float(lo), float(hi)]}
+        if options.get("payload_com") is not None:
+            cfg["payload"]["com"] = [float(c) for c in options["payload_com"]]
+        cfg.pop("box", None)
+    plant = dict(cfg.get("plant", {}))
+    for key in ("friction", "torque_limit", "noise", "delay"):
+        if options.get(key) is not None:
+            plant[key] = options[key]
+    if plant:
+        cfg["plant"] = plant
+    sim = dict(cfg.get("simulation", {}))
+    if options.get("duration") is not None:
+        sim["duration"] = float(options["duration"])
+    sim.pop("rate", None)  # the design's rate is given apart
+    if sim:
+        cfg["simulation"] = sim
+    cfg["perturbed"] = True
+    return json.loads(json.dumps(cfg))  # plain data, as a Job carries it
+
+
+def plant_specs(cfg: dict, n: int, seed: int = 0) -> list[tuple[int, str]]:
+    """``(job plant id, plant spec)`` of a design's verification (module docstring); -1 names a plant."""
+    from ..campaign.jobs import plant_seed
+
+    draws = [(k, f"random:{plant_seed(seed, k)}") for k in range(n)]
+    if cfg.get("payload"):
+        return [(-1, "lower"), (-1, "upper")] + draws
+    if cfg.get("bounds") and not cfg.get("box"):
+        return [(-1, "nominal")]
+    return [(-1, "nominal")] + draws
+
+
+def summarize(rows: list[dict]) -> dict:
+    """Counts of verdicts and the worst numbers of a set of ``runs.csv`` rows."""
+    if not rows:
+        return {"runs": 0, "clean": False, "verdicts": {}}
+    n = sum(1 for k in rows[0] if k.startswith("u_max_"))
+    u = np.array([[r[f"u_max_{j}"] for j in range(1, n + 1)] for r in rows], dtype=float)
+    err = np.array([r["max_error"] for r in rows], dtype=float)
+    worst = int(np.nanargmax(err)) if np.any(np.isfinite(err)) else 0
+    return {"runs": len(rows), "clean": all(r["verdict"] == "clean" for r in rows),
+            "verdicts": dict(Counter(r["verdict"] for r in rows)),
+            "worst_error": float(np.nanmax(err)), "worst_plant": rows[worst]["plant_seed"] or rows[worst]["job"],
+            "median_error": float(np.nanmedian(err)), "worst_chattering": float(np.nanmax([r["chattering"]
+                                                                                           for r in rows])),
+            "u_max": np.nanmax(u, axis=0).tolist(), "tolerance_met": all(bool(r["tolerance_met"]) for r in rows)}
+
+
+@dataclass
+class DesignResult:
+    """What :func:`verify_design` found (JSON-ready through :meth:`describe`)."""
+
+    config: dict
+    rate: float
+    margin: float
+    design: object
+    eps: float | None
+    levels: list = field(default_factory=list)
+    baselines: dict = field(default_factory=dict)
+    low_rates: list = field(default_factory=list)
+    plants: list = field(default_factory=list)
+    model: dict = field(default_factory=dict)
+    spectrum: dict = field(default_factory=dict)
+    effort_limit: list | None = None
+    eps_i: float | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True if a clean eps was found at the rate and at rate / margin on every plant."""
+        return self.eps is not None
+
+    @property
+    def chosen(self) -> dict | None:
+        """The level of the chosen eps."""
+        return next((lv for lv in self.levels if lv["eps"] == self.eps), None)
+
+    def gains(self) -> dict:
+        """``[gains.<law>]`` tables of the design (the fast form's, with the verified eps and eps_i)."""
+        out = {law: self.design.gains(law) for law in ("robust", "adaptive", "fbl", "pd")}
+        if self.eps is not None:
+            out["robust"]["eps"] = float(self.eps)
+        if self.design.eps_i is not None:
+            out["robust-coeff"] = {**self.design.gains("robust-coeff"), "eps_i": float(self.eps_i or
+                                                                                       self.design.eps_i)}
+        return out
+
+    def lowest_clean_rate(self) -> float | None:
+        """The lowest rate tested at which the design stayed clean (rate / margin at least, if verified)."""
+        clean = [r["rate"] for r in self.low_rates if r["clean"]]
+        base = [self.rate / self.margin] if self.ok else []
+        return min(clean + base) if clean + base else None
+
+    def describe(self) -> dict:
+        """Everything as plain data."""
+        return {"rate": self.rate, "margin": self.margin, "eps": self.eps, "eps_i": self.eps_i, "ok": self.ok,
+                "design": self.design.describe(), "levels": self.levels, "baselines": self.baselines,
+                "low_rates": self.low_rates, "lowest_clean_rate": self.lowest_clean_rate(),
+                "plants": self.plants, "model": self.model, "spectrum": self.spectrum,
+                "effort_limit": self.effort_limit, "gains": self.gains(), "config": self.config}
+
+
+def _resolve(cfg: dict, rate: float):
+    """The controller's model, trajectory and bounds of the configuration (no simulation)."""
+    from ..study import build_run
+
+    spec = build_run(controller="robust", config=cfg, rate=rate, eps=1.0)  # eps given: no defaults hook
+    rho_i = None
+    try:
+        rho_i = build_run(controller="robust-coeff", config=cfg, rate=rate, eps=1.0).model["rho_i"]
+    except ConfigError:
+        pass
+    return spec, rho_i
+
+
+def start_eps(design, sp, rate: float, margin: float, rho: float) -> float:
+    """Where the search starts: the fast form's eps for rate / margin with the design's K (the loop free of
+    oscillation at the lower rate too); the fast form's eps if K alone uses the budget there."""
+    from .rule import real_limit
+
+    Tm = margin / float(rate)
+    room = real_limit(design.delay) - Tm * design.L_K
+    return Tm * rho * sp.lam_yy() / room if room > 0 else design.eps * margin
+
+
+def _effort(robot):
+    try:
+        lim = np.array(robot.model.effortLimit, dtype=float)
+    except AttributeError:
+        return None
+    return lim.tolist() if lim.shape == (robot.n,) and np.all(np.isfinite(lim)) and np.all(lim > 0) else None
+
+
+class _Runner:
+    """Runs batches of jobs into one table and keeps their rows."""
+
+    def __init__(self, cfg, table, duration, workers, scheduler, progress):
+        self.cfg, self.table, self.duration = cfg, table, duration
+        self.workers, self.scheduler, self.progress = workers, scheduler, progress
+        self.rows: dict = {}
+
+    def jobs(self, law, gains, eps, rate, plants, tag=""):
+        from ..campaign.jobs import Job
+
+        cfg = json.dumps({**self.cfg, "gains": {law: gains}}, sort_keys=True)
+        return [Job(k, spec, law, eps, float(rate), self.duration, config=cfg, tag=tag) for k, spec in plants]
+
+    def run(self, jobs, what: str) -> list[dict]:
+        from ..campaign.runner import run_many
+
+        if self.progress is not None:
+            self.progress(what, len(jobs))
+
+        def keep(row):
+            self.rows[row["job"]] = row
+            if self.progress is not None:
+                self.progress(None, 1)
+
+        run_many(jobs, self.table, workers=self.workers, scheduler=self.scheduler, progress=keep)
+        return [self.rows[j.id] for j in jobs if j.id in self.rows]
+
+
+def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int = 50, seed: int = 0,
+                  workers: int | None = None, scheduler: str | None = None, steps: int = 3,
+                  progress=None) -> DesignResult:
+    """Design and verify the gains for ``rate`` [Hz] (module docstring).
+
+    Parameters
+    ----------
+    cfg : dict
+        The run configuration (:func:`design_config`).
+    rate : float
+        Controller rate [Hz].
+    table : rc3r.campaign.RunTable
+        Opened table the verification runs are appended to (``runs.csv``).
+    margin : float
+        The design must also be clean at ``rate / margin`` (>= 1).
+    n : int
+        Random plants besides the ends (payload) or the nominal robot (box).
+    seed : int
+        Seed of the random plants.
+    workers, scheduler
+        Where the runs go (:func:`rc3r.campaign.runner.run_many`).
+    steps : int
+        At most this many halvings and doublings of eps.
+    progress : callable, optional
+        ``progress(what, count)``: a new batch of ``count`` runs (``what`` a label), or ``(None, 1)`` a run done.
+    """
+    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
+        raise ConfigError(f"--rate must be a finite number of Hz > 0, got {rate!r}")
+    if not (isinstance(margin, (int, float)) and math.isfinite(margin) and margin >= 1):
+        raise ConfigError(f"--margin must be a finite number >= 1, got {margin!r}")
+    spec, rho_i = _resolve(cfg, rate)
+    duration = spec.options.duration
+    delay = 0 if spec.loop is None else int(spec.loop.delay)
+    sp = spectrum(spec.robot_model, spec.trajectory, duration)
+    rho = float(spec.model["rho"])
+    design = fast_design(sp, rate, rho=rho, rho_i=rho_i, delay=delay)
+    plants = plant_specs(cfg, n, seed)
+    res = DesignResult(cfg, float(rate), float(margin), design, None, plants=[s for _, s in plants],
+                       model={k: spec.model.get(k) for k in ("rho", "theta_source", "rho_source", "box", "nominal")},
+                       spectrum={"m_min": sp.m_min, "m_max": sp.m_max, "L_Y": sp.lam_yy(), "samples": int(sp.t.size),
+                                 "minv_diag_max": sp.minv_diag_max.tolist()},
+                       effort_limit=_effort(spec.robot_model))
+    run = _Runner(cfg, table, duration, workers, scheduler, progress)
+    sliding = {"K": design.gains("robust")["K"], "Lambda": design.Lambda}
+    low = rate / margin
+
+    def level(eps):
+        jobs = run.jobs("robust", sliding, eps, rate, plants) + \
+            (run.jobs("robust", sliding, eps, low, plants) if margin > 1 else [])
+        rows = run.run(jobs, f"robust, eps {eps:.4g}")
+        at = summarize([r for r in rows if r["rate_hz"] == float(rate)])
+        lo = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else at
+        lv = {"eps": float(eps), "factor": float(eps / design.eps), "at_rate": at, "at_low": lo,
+              "clean": bool(at["clean"] and lo["clean"])}
+        res.levels.append(lv)
+        return lv["clean"]
+
+    eps = start_eps(design, sp, rate, margin, rho)
+    clean, failed = (eps, None) if level(eps) else (None, eps)
+    for _ in range(steps):  # halve while clean, double while not, until the boundary is bracketed
+        if clean is not None and failed is None:
+            eps = clean / 2.0
+            if level(eps):
+                clean = eps
+            else:
+                failed = eps
+        elif clean is None:
+            eps = failed * 2.0
+            if level(eps):
+                clean = eps
+            else:
+                failed = eps
+        else:
+            break
+    if clean is not None and failed is not None and failed < clean:  # one geometric bisection of the bracket
+        eps = math.sqrt(clean * failed)
+        if level(eps):
+            clean = eps
+    res.eps = clean
+    res.levels.sort(key=lambda lv: lv["eps"])
+    factor = 1.0 if res.eps is None else res.eps / design.eps
+    fbl = run.run(run.jobs("fbl", design.gains("fbl"), None, rate, plants), "fbl baseline")
+    res.baselines["fbl"] = summarize(fbl)
+    if design.eps_i is not None:
+        sl = {"K": sliding["K"], "Lambda": sliding["Lambda"]}
+        tried = [design.eps_i * factor] + ([design.eps_i] if factor != 1.0 else [])
+        for eps_i in tried:
+            rc = summarize(run.run(run.jobs("robust-coeff", sl, eps_i, rate, plants), f"robust-coeff, eps_i {eps_i:.4g}"))
+            res.baselines["robust-coeff"] = {**rc, "eps_i": float(eps_i)}
+            res.eps_i = float(eps_i)
+            if rc["clean"]:
+                break
+    res.baselines["adaptive"] = summarize(run.run(run.jobs("adaptive", design.gains("adaptive"), None, rate,
+                                                           plants), "adaptive"))
+    if res.eps is not None:
+        r = low
+        for _ in range(4):
+            r /= math.sqrt(2.0)
+            s = summarize(run.run(run.jobs("robust", sliding, res.eps, r, plants[:4]), f"robust at {r:.4g} Hz"))
+            res.low_rates.append({"rate": float(r), "clean": s["clean"], "verdicts": s["verdicts"],
+                                  "worst_error": s.get("worst_error")})
+            if not s["clean"]:
+                break
+    return res
