@@ -162,6 +162,8 @@ def _campaign_args(p, out: str, plants: bool = False) -> None:
     p.add_argument("--duration", type=_positive(), help="simulated time per run [s] (default 10)")
     p.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default rr3)")
     p.add_argument("--box", help="box TOML (default: the robot's box)")
+    p.add_argument("--bounds", metavar="FILE", help="bounds.toml of rc3r identify: the controllers' theta_0, rho, "
+                                                    "rho_i, P, and the plants drawn in its ellipsoid")
     p.add_argument("--config", help="TOML with gains, trajectory, bounds (docs/control.md)")
     p.add_argument("--out", default=out, help=f"output directory (default {out})")
     p.add_argument("--workers", type=_positive(int), help="local worker processes (default: all cores)")

@@ -132,6 +132,8 @@ def _config(args) -> dict:
     for key in ("urdf", "tolerance"):
         if opts.get(key) is not None:
             cfg[key] = opts[key]
+    if getattr(args, "bounds", None) is not None:
+        cfg["bounds"] = str(args.bounds)
     if opts.get("lock"):
         cfg["lock"] = opts["lock"]
     if getattr(args, "payload", None) is not None:
@@ -163,7 +165,8 @@ def cmd_montecarlo(args) -> int:
         summary = montecarlo_summary(rows)
         atomic_write_json(out / "summary.json", {"summary": summary, "radii": meta["radii"],
                                                   "request": meta["request"], "provenance": provenance()})
-        title = f"{len({r['plant'] for r in rows})} plants of the box, seed {args.seed}"
+        where = f"the ellipsoid of {cfg['bounds']}" if cfg.get('bounds') else "the box"
+        title = f"{len({r['plant'] for r in rows})} plants of {where}, seed {args.seed}"
         atomic_savefig(error_distribution(rows, f"max error per controller: {title}"), out / "error_cdf.png")
         atomic_savefig(error_vs_distance(rows, meta["radii"] or {}, f"max error vs ||theta - theta_0||: {title}"),
                        out / "error_vs_distance.png")

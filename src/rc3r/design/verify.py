@@ -7,7 +7,8 @@ trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
 2. runs the robust law with it on the plants of the bounds -- for a payload the lightest and the
    heaviest end and ``n`` seeded random masses, for a box its nominal robot and ``n`` seeded random
    plants (``random:<plant_seed(seed, k)>``, as ``rc3r montecarlo``), for an identification's
-   bounds the nominal robot -- at the rate and at rate / margin, as campaign jobs
+   bounds the ellipsoid's centre and ``n`` seeded plants drawn in it
+   (:func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`) -- at the rate and at rate / margin, as campaign jobs
    (:func:`rc3r.campaign.runner.run_many`: a local pool or a Dask scheduler);
 3. starts from the fast form's eps for rate / margin (:func:`start_eps`), tightens eps by halves
    while every run is ``clean``, or backs off by doubling while one chatters, saturates, leaves the
@@ -89,8 +90,8 @@ def plant_specs(cfg: dict, n: int, seed: int = 0) -> list[tuple[int, str]]:
     draws = [(k, f"random:{plant_seed(seed, k)}") for k in range(n)]
     if cfg.get("payload"):
         return [(-1, "lower"), (-1, "upper")] + draws
-    if cfg.get("bounds") and not cfg.get("box"):
-        return [(-1, "nominal")]
+    if cfg.get("bounds") and not cfg.get("box"):  # the identified ellipsoid: its centre and draws in it
+        return [(-1, "centre")] + draws
     return [(-1, "nominal")] + draws
 
 

@@ -1,0 +1,263 @@
+r"""Plants drawn from an ellipsoid of coefficients (the bounds of ``rc3r identify``).
+
+An identification gives the controller :math:`\theta_0` and the confidence ellipsoid
+:math:`\mathcal E = \{\theta : (\theta - \theta_0)^T P (\theta - \theta_0) \le 1\}`
+(``bounds.toml``, :mod:`rc3r.identify.bounds_file`). A campaign on those bounds needs *plants*
+whose coefficients lie in :math:`\mathcal E`: robots, i.e. standard parameters
+:math:`\pi` (10 per body, the robot's own order) with :math:`\theta(\pi) = \theta` that a simulator can run.
+
+:func:`draw_from_ellipsoid` draws :math:`\theta` uniformly in :math:`\mathcal E`
+(``random:<seed>``: :math:`\theta = \theta_0 + L\,u`, :math:`L L^T = P^{-1}`, :math:`u` uniform in
+the unit ball), on its boundary (``boundary:<seed>``, :math:`\|u\| = 1`) or at its centre
+(``centre``), then realises it by a robot near the nominal one (:func:`realise_theta`): the
+smallest relative change, by minimum-norm Gauss-Newton steps from the nominal robot, of
+
+* for a Pinocchio arm whose bodies are all physically consistent, the Cholesky factors of the
+  bodies' pseudo-inertias, :math:`J_k(\pi) = L_k L_k^T` (Wensing, Kim, Slotine, RA-L 2018): every
+  plant drawn is then a real rigid body (mass > 0, inertia positive definite, triangle inequality);
+* otherwise (the paper's 3R, whose Table 1 violates the triangle inequality) the standard
+  parameters themselves: with :math:`\theta = T\pi` one step gives
+  :math:`\pi = \pi_{nom} + D\,(T D)^{+}\,(\theta - T\pi_{nom})`, :math:`D = \mathrm{diag}(s)`,
+  :math:`s_k = \max(|\pi_{nom,k}|, 10^{-3} \max_j |\pi_{nom,j}|)`, the minimiser of
+  :math:`\|D^{-1}(\pi - \pi_{nom})\|_2` subject to :math:`T\pi = \theta`.
+
+The coefficients outside :math:`\theta` (its null space) stay near the nominal robot's. A draw
+that no such robot realises (a confidence ellipsoid can reach beyond the physically consistent
+coefficients: on the UR5 with 5 % half-widths, about half the draws; the SDP of
+:func:`rc3r.identify.consistency.check_consistency` agrees that they are out of reach:
+``tests/test_ellipsoid_plants.py``), or whose
+robot cannot be simulated (:meth:`~rc3r.robots.base.Robot.require_simulable`), is redrawn from the
+same seeded stream, at most :data:`MAX_DRAWS` times: ``random:<seed>`` is uniform on the
+realisable part of :math:`\mathcal E`.
+
+This is not the physical-consistency projection of :func:`rc3r.identify.consistency.check_consistency`
+(a semidefinite program, cvxpy): that one projects an estimate; this one draws plants, and needs no solver.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ConfigError, ParameterError
+
+__all__ = ["MAX_DRAWS", "ELLIPSOID_SPECS", "ellipsoid_factor", "draw_theta", "realise_theta", "draw_from_ellipsoid"]
+
+#: Redraws of ``random:<seed>`` / ``boundary:<seed>`` before a non-simulable ellipsoid is refused.
+MAX_DRAWS = 200
+
+#: The plant specs :func:`draw_from_ellipsoid` understands (besides ``nominal``).
+ELLIPSOID_SPECS = "centre, random:<seed>, boundary:<seed>"
+
+
+def ellipsoid_factor(P) -> np.ndarray:
+    r"""``L`` (p, p) with :math:`L L^T = P^{-1}`: :math:`\theta_0 + L u`, :math:`\|u\| \le 1`, fills the ellipsoid.
+
+    Raises
+    ------
+    ParameterError
+        ``P`` is not symmetric positive definite.
+    """
+    P = np.asarray(P, dtype=float)
+    if P.ndim != 2 or P.shape[0] != P.shape[1] or not np.all(np.isfinite(P)):
+        raise ParameterError(f"ellipsoid matrix P must be a finite square matrix, got shape {P.shape}")
+    w, V = np.linalg.eigh(0.5 * (P + P.T))
+    if w[0] <= 0:
+        raise ParameterError(f"ellipsoid matrix P is not positive definite (smallest eigenvalue {w[0]:.3g})")
+    return V / np.sqrt(w)
+
+
+def draw_theta(theta0, P, rng: np.random.Generator, boundary: bool = False) -> np.ndarray:
+    r"""One :math:`\theta` uniform in the ellipsoid (or on its boundary), (p,).
+
+    :math:`u = g\,r^{1/p}/\|g\|` with :math:`g \sim N(0, I_p)`, :math:`r \sim U(0, 1)` (``r = 1`` on
+    the boundary) is uniform in the unit ball; :math:`\theta = \theta_0 + L u`.
+    """
+    theta0 = np.asarray(theta0, dtype=float)
+    L = ellipsoid_factor(P)
+    p = theta0.size
+    g = rng.standard_normal(p)
+    r = 1.0 if boundary else rng.uniform() ** (1.0 / p)
+    return theta0 + L @ (g * (r / np.linalg.norm(g)))
+
+
+#: Standard-parameter names of one body in Pinocchio's order (``toDynamicParameters``), body 1.
+_PIN_ORDER = ("m1", "mcx1", "mcy1", "mcz1", "Ixx1", "Ixy1", "Iyy1", "Ixz1", "Iyz1", "Izz1")
+_TRIL = np.tril_indices(4)
+
+
+def _pseudo(block) -> np.ndarray:
+    from ..identify.consistency import pseudo_inertia
+
+    return pseudo_inertia(block)
+
+
+def _from_pseudo(J) -> np.ndarray:
+    """Pinocchio's 10 parameters of pseudo-inertias ``J`` (..., 4, 4) (inverse of ``pseudo_inertia``:
+    I = tr(S) 1 - S), (..., 10)."""
+    S, h, m = J[..., :3, :3], J[..., :3, 3], J[..., 3, 3]
+    I = np.trace(S, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - S
+    return np.concatenate([m[..., None], h, np.stack([I[..., 0, 0], I[..., 0, 1], I[..., 1, 1], I[..., 0, 2],
+                                                      I[..., 1, 2], I[..., 2, 2]], axis=-1)], axis=-1)
+
+
+def _cholesky_chart(robot):
+    """``(xi_0, pi(xi))``: every body's pseudo-inertia as ``L L^T`` (``L`` lower triangular, 10 numbers), so
+    that every ``xi`` is a physically consistent robot (Wensing et al. 2018); None when the robot's
+    parameters are not in Pinocchio's order or a body of the nominal robot is not strictly consistent."""
+    if tuple(robot.standard_parameter_names[:10]) != _PIN_ORDER:
+        return None
+    pi0 = np.asarray(robot.standard_parameters(), dtype=float)
+    nb = pi0.size // 10
+    xi0 = []
+    for k in range(nb):
+        try:
+            xi0.append(np.linalg.cholesky(_pseudo(pi0[10 * k:10 * k + 10]))[_TRIL])
+        except np.linalg.LinAlgError:
+            return None
+
+    def pi_of(xi):
+        xi = np.asarray(xi, dtype=float)
+        L = np.zeros(xi.shape[:-1] + (nb, 4, 4))
+        L[..., _TRIL[0], _TRIL[1]] = xi.reshape(xi.shape[:-1] + (nb, 10))
+        return _from_pseudo(L @ np.swapaxes(L, -1, -2)).reshape(xi.shape[:-1] + (10 * nb,))
+
+    return np.concatenate(xi0), pi_of
+
+
+def realise_theta(robot, theta, label: str | None = None, iterations: int = 30):
+    r"""A robot near ``robot`` whose coefficients are ``theta``, as physically consistent as ``robot``.
+
+    Gauss-Newton with minimum-norm steps on the under-determined :math:`\theta(\pi(\xi)) = \theta^*`,
+    :math:`\xi \leftarrow \xi + D (J D)^+ (\theta^* - \theta)`, :math:`J = \partial\theta/\partial\xi`,
+    :math:`D` the magnitudes of the nominal :math:`\xi` (floored at 1e-3 of the largest), from the nominal
+    robot. The chart :math:`\xi`:
+
+    * a Pinocchio arm whose every body is strictly physically consistent: :math:`\xi` the Cholesky
+      factors of the bodies' pseudo-inertias, :math:`J_k = L_k L_k^T` (every :math:`\xi` is a real rigid
+      body: mass > 0, inertia positive definite, triangle inequality);
+    * otherwise (the 3R of Table 1, which violates the triangle inequality): the standard parameters
+      themselves (:math:`\theta` linear in them: one step is the minimum-norm solution of the module
+      docstring; the 3R's :meth:`~rc3r.robots.base.Robot.theta_of_standard` is quadratic in its own
+      parameters and takes a few steps).
+
+    Parameters
+    ----------
+    robot : Robot
+        The nominal robot (its kinematics and standard parameters).
+    theta : array_like, (p,)
+        The coefficients to realise.
+    iterations : int
+        At most this many steps.
+
+    Returns
+    -------
+    Robot
+        ``robot.with_standard_parameters(pi)``, not yet checked for simulability.
+
+    Raises
+    ------
+    ParameterError
+        ``theta`` is not reached to 1e-10 (relative) in ``iterations`` steps.
+    """
+    theta = np.asarray(theta, dtype=float)
+    chart = _cholesky_chart(robot)
+    if chart is None:
+        xi = np.asarray(robot.standard_parameters(), dtype=float).copy()
+
+        def pi_of(x):
+            return x
+    else:
+        xi, pi_of = chart
+    s = np.maximum(np.abs(xi), 1e-3 * max(float(np.abs(xi).max()), 1e-300))
+    E = np.diag(s)
+
+    def f(x):
+        return np.asarray(robot.theta_of_standard(pi_of(x)), dtype=float)
+
+    scale = max(float(np.linalg.norm(theta)), 1e-300)
+    r = theta - f(xi)
+    miss = float(np.linalg.norm(r)) / scale
+    for _ in range(int(iterations)):
+        if miss <= 1e-10:
+            break
+        J = ((f(xi + E) - f(xi - E)) / 2.0).T  # d theta / d z: both charts are at most quadratic, so exact
+        step = s * (np.linalg.pinv(J, rcond=1e-12) @ r)
+        for _ in range(30):  # backtracking: the chart is quadratic, a full step can overshoot
+            r_new = theta - f(xi + step)
+            m_new = float(np.linalg.norm(r_new)) / scale
+            if m_new < miss:
+                break
+            step = step / 2.0
+        else:
+            break
+        xi, r, miss = xi + step, r_new, m_new
+    if not miss <= 1e-10:
+        raise ParameterError(f"coefficients not realisable by robot '{robot.label}' (relative misfit {miss:.2g})")
+    return robot.with_standard_parameters(pi_of(xi), label or "ellipsoid")
+
+
+def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bounds"):
+    """A plant of the ellipsoid: ``centre``, ``random:<seed>`` or ``boundary:<seed>`` (module docstring).
+
+    Parameters
+    ----------
+    robot : Robot
+        The nominal robot.
+    theta0, P : ndarray, (p,), (p, p)
+        The ellipsoid ``(theta - theta0)^T P (theta - theta0) <= 1``.
+    spec : str
+        The plant spec.
+    source : str
+        Named in the error messages (e.g. the bounds file).
+
+    Returns
+    -------
+    Robot
+        A simulable robot labelled ``spec`` whose ``theta`` lies in the ellipsoid.
+
+    Raises
+    ------
+    ConfigError
+        An unknown or malformed spec.
+    ParameterError
+        No robot near the nominal one realises a draw in :data:`MAX_DRAWS` (or the centre).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from rc3r.robots import load_robot
+    >>> arm = load_robot("rr3")
+    >>> P = np.diag(1.0 / (0.05 * np.abs(arm.theta) + 1e-3) ** 2)
+    >>> plant = draw_from_ellipsoid(arm, arm.theta, P, "random:3")
+    >>> d = plant.theta - arm.theta
+    >>> bool(d @ P @ d <= 1.0 + 1e-9)
+    True
+    """
+    kind, _, arg = str(spec).strip().partition(":")
+    kind = kind.lower()
+    if kind in ("centre", "center") and not arg:
+        try:
+            plant = realise_theta(robot, theta0, label="centre")
+            plant.require_simulable()
+        except ParameterError as exc:
+            raise ParameterError(f"the centre theta_0 of {source} has no simulable plant near robot "
+                                 f"'{robot.label}': {exc}") from None
+        return plant
+    if kind not in ("random", "boundary"):
+        raise ConfigError(f"bad plant {spec!r} with bounds from {source}: expected nominal, {ELLIPSOID_SPECS}")
+    try:
+        seed = int(arg)
+        if seed < 0:
+            raise ValueError
+    except ValueError:
+        raise ConfigError(f"bad plant {spec!r}: '{kind}:' needs a seed >= 0, e.g. {kind}:0") from None
+    rng = np.random.default_rng(seed)
+    for _ in range(MAX_DRAWS):
+        theta = draw_theta(theta0, P, rng, boundary=kind == "boundary")
+        try:
+            plant = realise_theta(robot, theta, label=spec)
+            plant.require_simulable()
+            return plant
+        except ParameterError:
+            continue
+    raise ParameterError(f"plant {spec!r}: no robot near '{robot.label}' realises any of {MAX_DRAWS} draws from the "
+                         f"ellipsoid of {source} (is it the bounds of this arm?)")
