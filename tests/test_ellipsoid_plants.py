@@ -156,3 +156,29 @@ def test_montecarlo_on_bounds_draws_plants_in_the_ellipsoid(bounds_3r, tmp_path)
     dist = [r["theta_dist"] for r in rows]
     assert len(rows) == 4 and all(0 < x <= rho * (1 + 1e-9) for x in dist) and len(set(dist)) == 4
     assert all(r["status"] == "ok" for r in rows)
+
+
+def test_design_on_bounds_verifies_on_the_centre_and_draws_and_names_the_file_absolutely(bounds_3r, tmp_path,
+                                                                                       monkeypatch):
+    """design --bounds (relative path, from another directory): its runs are the ellipsoid's centre and N
+    draws (theta_dist 0 for the centre to 1e-9 rho, > 0 and <= rho for the draws), and design.toml names the
+    bounds file by its absolute path, so montecarlo --config design.toml runs from any directory."""
+    from rc3r.campaign import read_rows
+    from rc3r.io import read_toml
+
+    path, arm, P = bounds_3r
+    monkeypatch.chdir(path.parent)
+    out = tmp_path / "d"
+    main(["design", "--robot", "rr3", "--bounds", path.name, "--rate", "1000", "--margin", "1", "--n", "2",
+          "--duration", "0.3", "--workers", "1", "--out", str(out)])
+    cfg = read_toml(out / "design.toml", "design")
+    assert cfg["bounds"] == str(path.resolve())
+    rows = [r for r in read_rows(out / "runs.csv") if r["controller"] == "robust"]
+    rho = rows[0]["rho"]
+    centre = [r["theta_dist"] for r in rows if r["job"].startswith("centre/")]
+    drawn = [r["theta_dist"] for r in rows if r["plant"] >= 0]
+    assert centre and max(centre) <= 1e-9 * rho
+    assert drawn and all(0 < d <= rho * (1 + 1e-9) for d in drawn)
+    monkeypatch.chdir(tmp_path)
+    assert main(["montecarlo", "--config", str(out / "design.toml"), "--n", "1", "--duration", "0.2",
+                 "--controllers", "robust", "--workers", "1", "--out", str(tmp_path / "mc")]) == 0

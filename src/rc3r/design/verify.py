@@ -27,6 +27,7 @@ import json
 import math
 from collections import Counter
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -56,7 +57,10 @@ def design_config(config: dict | None = None, **options) -> dict:
         raise ConfigError("give --robot NAME or --urdf PATH, not both")
     for key in ("robot", "urdf", "box", "bounds", "tolerance"):
         if options.get(key) is not None:
-            cfg[key] = options[key] if key == "tolerance" else str(options[key])
+            cfg[key] = options[key] if key in ("tolerance", "robot") else str(Path(options[key]).resolve())
+    for key in ("urdf", "box", "bounds"):  # design.toml names its files absolutely: it is run from anywhere
+        if isinstance(cfg.get(key), str) and Path(cfg[key]).exists():
+            cfg[key] = str(Path(cfg[key]).resolve())
     if options.get("urdf") is not None:
         cfg.pop("robot", None)
     if options.get("lock"):
@@ -262,7 +266,9 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     design = fast_design(sp, rate, rho=rho, rho_i=rho_i, delay=delay)
     plants = plant_specs(cfg, n, seed)
     res = DesignResult(cfg, float(rate), float(margin), design, None, plants=[s for _, s in plants],
-                       model={k: spec.model.get(k) for k in ("rho", "theta_source", "rho_source", "box", "nominal")},
+                       model={**{k: spec.model.get(k) for k in ("rho", "theta_source", "rho_source", "box", "nominal")},
+                              "box": spec.model.get("box") or (f"identified bounds {spec.model['bounds_file']}"
+                                                               if spec.model.get("bounds_file") else None)},
                        spectrum={"m_min": sp.m_min, "m_max": sp.m_max, "L_Y": sp.lam_yy(), "samples": int(sp.t.size),
                                  "minv_diag_max": sp.minv_diag_max.tolist()},
                        effort_limit=_effort(spec.robot_model))
