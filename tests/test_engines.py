@@ -229,3 +229,28 @@ def test_instantiation_is_written_once_and_cached(tmp_path):
     assert first[1].startswith(str(tmp_path / "rc3r_engines")) and first[3:5] == ["ok", "fast"]
     assert first[1:3] == second[1:3]
     assert float(second[5]) < float(first[5])
+
+
+def test_is_cached_looks_only_at_the_integrator_the_run_needs(tmp_path, monkeypatch, capsys):
+    """A sampled-only history (the sampled integrator's numba index on disk, the continuous one's not):
+    is_cached("sampled") is True, is_cached("continuous") and is_cached() False, and the command line's
+    compile announcement is silent for a sampled run and speaks for a continuous one."""
+    from types import SimpleNamespace
+
+    from rc3r.cli.run import announce_compile
+    from rc3r.simulate import _fast
+
+    (tmp_path / "s.nbi").write_text("")
+
+    def disp(path):
+        return SimpleNamespace(_cache=SimpleNamespace(_cache_file=SimpleNamespace(_index_path=str(path))))
+
+    fake = SimpleNamespace(integrate_sampled=disp(tmp_path / "s.nbi"), integrate_continuous=disp(tmp_path / "c.nbi"))
+    monkeypatch.setattr(_fast, "instantiate", lambda module: fake)
+    eng = _fast.CompiledSimulator("x")
+    assert eng.is_cached("sampled") and not eng.is_cached("continuous") and not eng.is_cached()
+    plant = SimpleNamespace(fast_engine=eng, n=6)
+    announce_compile(plant, 1000.0)
+    assert capsys.readouterr().err == ""
+    announce_compile(plant, None)
+    assert "compiling the simulator's kernels" in capsys.readouterr().err

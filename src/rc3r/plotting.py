@@ -25,7 +25,10 @@ def plot_run(res, path: str | Path, title: str) -> Path:
 def run_figure(res, title: str) -> Figure:
     """Joint errors (left) and torques (right), one row per joint, as the paper's figures 3-7."""
     n = res.q.shape[1]
-    fig = Figure(figsize=(11, 1.2 + 1.95 * n), constrained_layout=True)
+    height = 1.2 + 1.95 * n
+    fig = Figure(figsize=(11, height))  # a fixed layout: the layout engine costs seconds for a 6-joint arm
+    fig.subplots_adjust(left=0.08, right=0.985, wspace=0.22, hspace=0.12, bottom=0.55 / height,
+                        top=1.0 - 0.75 / height)
     axes = np.atleast_2d(fig.subplots(n, 2, sharex=True))
     for j in range(n):
         axes[j, 0].plot(res.t, res.e[:, j], lw=0.9)

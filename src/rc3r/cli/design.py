@@ -113,7 +113,7 @@ def cmd_design(args) -> int:
     print(f"rc3r design: {first.plant.n}-joint arm '{first.robot_model.label}', {args.rate:g} Hz (margin "
           f"{args.margin:g}), {args.n} random plants, {first.options.duration:g} s each, on {where} -> {out}/",
           file=sys.stderr)
-    announce_compile(first.plant)
+    announce_compile(first.plant, float(args.rate))
     t0 = time.perf_counter()
     with output_dir(out, own=DESIGN_ENTRIES) as tmp:
         bar = _Bar()

@@ -90,7 +90,7 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
                 print(f"rc3r {kind}: {table.dropped} incomplete row(s) of {out}/runs.csv dropped; they run again",
                       file=sys.stderr)
             print(f"rc3r {kind}: {len(jobs)} runs, {done} already done, on {where} -> {out}/", file=sys.stderr)
-            announce_compile(first.plant)
+            announce_compile(first.plant, first.options.rate)
             bar = _progress_bar(len(jobs), done, kind)
             t0 = time.perf_counter()
             try:

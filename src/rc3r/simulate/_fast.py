@@ -186,16 +186,18 @@ class CompiledSimulator:
             raise ParameterError(f"robot {rigid.name!r} supplies kernels {module!r}, its engine runs {self.module!r}")
         return np.ascontiguousarray(kc, dtype=np.float64)
 
-    def is_cached(self) -> bool:
-        """True if numba's disk cache holds both integrators of this supply (no compilation on first use).
+    def is_cached(self, which: str | None = None) -> bool:
+        """True if numba's disk cache holds the integrators of this supply a run needs (no compilation on
+        first use): ``which`` ``"sampled"``, ``"continuous"``, or None for both.
 
         Reads numba's cache index paths (an internal of numba 0.5x-0.6x); if they cannot be
         read, answers True (no announcement rather than a wrong one).
         """
         try:
             mod = self.instance
-            return all(os.path.exists(f._cache._cache_file._index_path)
-                       for f in (mod.integrate_continuous, mod.integrate_sampled))
+            funcs = {"sampled": (mod.integrate_sampled,), "continuous": (mod.integrate_continuous,)}.get(
+                which, (mod.integrate_continuous, mod.integrate_sampled))
+            return all(os.path.exists(f._cache._cache_file._index_path) for f in funcs)
         except (AttributeError, ParameterError):
             return True
 
