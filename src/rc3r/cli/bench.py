@@ -146,9 +146,10 @@ def _render_generic(g: dict) -> str:
             for name, x in g["regressor"].items()]
     lines += [_table(["robot", "n", "p", "Y (batch)", "Y (one call/state)", "Y (2 Pinocchio calls)", "pin.rnea",
                       "Y batch / rnea"], rows, {1, 2, 3, 4, 5, 6, 7}), ""]
-    rows = [[k, v["engine"], v["status"], f"{v['duration_s']:g} s", _si(v["wall_s"]), f"{v['max_abs_error']:.3g}"]
-            for k, v in g["runs"].items()]
-    lines += [_table(["run", "engine", "status", "simulated", "wall", "max|e| [rad]"], rows, {3, 4, 5}), ""]
+    rows = [[k, v["engine"], v["status"], f"{v['duration_s']:g} s", _si(v["wall_s"]), _si(v.get("per_step_s")),
+             f"{v.get('rnea_per_step', float('nan')):.3g}", f"{v['max_abs_error']:.3g}"] for k, v in g["runs"].items()]
+    lines += [_table(["run", "engine", "status", "simulated", "wall", "per step", "pin.rnea / step", "max|e| [rad]"],
+                     rows, {3, 4, 5, 6, 7}), ""]
     for key, t in g["targets"].items():
         val = f"{t['measured']:.3g} {t['unit']}" + (" (extrapolated to 10 s)" if t["extrapolated"] else "")
         lines.append(f"target {key}: {t['op']} {t['limit']:g} {t['unit']}: {val} -> "

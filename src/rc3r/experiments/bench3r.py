@@ -73,11 +73,13 @@ __all__ = ["run_bench", "TARGETS"]
 
 #: The issue's targets: name -> (limit, comparison, unit, description).
 TARGETS = {
-    "tau_per_state": (1e-7, "<=", "s", "closed-form tau = Y(q,qd,qdd) theta per state, bulk or in compiled code"),
+    "tau_per_state": (35e-9, "<=", "s", "closed-form tau = Y(q,qd,qdd) theta per state, bulk or in compiled code "
+                      "(the speed issue's 35 ns; was 100 ns)"),
     "tau_speedup_vs_rnea": (10.0, ">=", "x", "closed-form tau vs pin.rnea looped from Python"),
     "slotine_li_per_state": (1e-7, "<=", "s", "Slotine-Li Y(q,qd,v,a) per state, bulk or in compiled code"),
     "slotine_li_speedup_vs_rnea": (10.0, ">=", "x", "Slotine-Li Y vs pin.rnea looped from Python"),
-    "robust_perturbed_continuous_10s": (1.0, "<=", "s", "robust-perturbed, 10 s, continuous: wall time"),
+    "robust_perturbed_continuous_10s": (0.12, "<=", "s", "robust-perturbed, 10 s, continuous: wall time "
+                                        "(the speed issue's 0.12 s; was 1 s)"),
     "paper_five_continuous_10s": (5.0, "<=", "s", "all five paper scenarios, 10 s, continuous: total wall"),
     "fbl_perturbed_sampled_1khz_10s": (0.1, "<=", "s", "FBL-perturbed, 10 s, sampled at 1 kHz: wall time"),
 }
