@@ -235,3 +235,40 @@ def test_bad_design_input_is_one_line_and_writes_nothing(tmp_path, capsys, argv,
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and err.startswith("rc3r: error:") and needle in err, err
     assert not out.exists()
+
+
+# ---- the campaign's robot cache and the design benchmark's table --------------------------------------
+
+def test_a_urdf_arm_is_read_once_per_process_and_again_when_its_file_changes(tmp_path):
+    """build_run reads a URDF arm once per file and lock in a process (rc3r.study._urdf_robot_cached: a design's
+    or a Monte Carlo's jobs all rebuild the same arm); the same file gives the same robot, another lock or an
+    edited file a new one, and the runs built from the cached robot equal those from a fresh read."""
+    import shutil
+
+    import rc3r.study as study
+    from rc3r.robots.pinocchio import PinocchioRobot, example_robot_data_dir
+
+    src = example_robot_data_dir() / "double_pendulum_description/urdf/double_pendulum.urdf"
+    path = tmp_path / "dp.urdf"
+    shutil.copy(src, path)
+    a = study._nominal(None, urdf=str(path))
+    assert study._nominal(None, urdf=str(path)) is a
+    fresh = PinocchioRobot.from_urdf(path)
+    np.testing.assert_array_equal(a.theta, fresh.theta)
+    spec = rc3r.build_run(urdf=str(path), controller="fbl", duration=0.05, rate=1000.0)
+    assert spec.robot_model is a
+    path.write_text(path.read_text() + "\n<!-- edited -->\n")  # size changes: read again
+    assert study._nominal(None, urdf=str(path)) is not a
+
+
+def test_design_benchmark_table_states_the_goal():
+    """render() of a bench_design result: wall, runs, runs per second and the 2-minute goal with the ratio."""
+    from rc3r.design.bench import GOAL_S, render
+
+    r = {"command": "rc3r design --robot ur5 --payload 0:3 --rate 1000 --out DIR", "exit": 0, "wall_s": 240.0,
+         "runs": 600, "runs_per_s": 2.5, "simulated_s": 6000.0, "goal_s": GOAL_S, "ratio_to_goal": 2.0,
+         "met": False, "eps": 8.0, "n": 50, "duration_s": 10.0, "rate_hz": 1000.0, "workers": None, "cpus": 2,
+         "quick": False}
+    text = render(r)
+    assert GOAL_S == 120.0
+    assert "240.0 s" in text and "600" in text and "2.5" in text and "wall / goal = 2 -> NOT MET" in text

@@ -459,7 +459,7 @@ def _nominal(robot: str | None, urdf=None, lock: dict | None = None):
 
     if urdf is None:
         if not lock:
-            return load_robot(robot or DEFAULT_ROBOT)
+            return _robot_cached(("robot", robot or DEFAULT_ROBOT), lambda: load_robot(robot or DEFAULT_ROBOT))
         from .robots.pinocchio import NAMED, PinocchioRobot
 
         if (robot or DEFAULT_ROBOT) not in NAMED:
@@ -471,30 +471,36 @@ def _nominal(robot: str | None, urdf=None, lock: dict | None = None):
     return _urdf_robot_cached(urdf, lock)
 
 
-#: URDF arms already read in this process, keyed by (path, mtime, size, lock): :func:`_urdf_robot_cached`.
-_URDF_CACHE: dict = {}
+#: Robots already read in this process (:func:`_robot_cached`).
+_ROBOT_CACHE: dict = {}
+
+
+def _robot_cached(key, make):
+    """``make()``, once per ``key`` in a process: the controller's model of a registered robot or a URDF arm.
+
+    Reading a Pinocchio arm computes its base parameters (a least-squares fit and an SVD: about 4 s for
+    the UR5, ten times its 2 s simulation at 1 kHz), and a campaign worker builds every job of a design
+    or a Monte Carlo from the same arm. A run does not change the robot (plants are new objects), so the
+    cached one is returned.
+    """
+    if key not in _ROBOT_CACHE:
+        _ROBOT_CACHE[key] = make()
+    return _ROBOT_CACHE[key]
 
 
 def _urdf_robot_cached(urdf, lock: dict | None = None):
-    """:func:`rc3r.robots.load_urdf_robot`, once per file and lock in a process.
-
-    Reading a URDF arm computes its base parameters (a least-squares fit and an SVD: about 4 s for the
-    UR5, ten times its 2 s simulation at 1 kHz); a campaign worker builds every job of a design or a
-    Monte Carlo from the same file. The robot is not changed by a run (plants are new objects), so the
-    cached one is returned; a file changed on disk (mtime or size) is read again.
-    """
+    """:func:`rc3r.robots.load_urdf_robot` through :func:`_robot_cached`, keyed by the file (its real path,
+    mtime and size: a file changed on disk is read again) and the locked joints."""
     import os
 
     from .robots import load_urdf_robot
 
     try:
         st = os.stat(urdf)
-        key = (os.path.realpath(urdf), st.st_mtime_ns, st.st_size, tuple(sorted((lock or {}).items())))
+        key = ("urdf", os.path.realpath(urdf), st.st_mtime_ns, st.st_size, tuple(sorted((lock or {}).items())))
     except (OSError, TypeError, ValueError):
         return load_urdf_robot(urdf, lock=lock)  # the reader gives the error
-    if key not in _URDF_CACHE:
-        _URDF_CACHE[key] = load_urdf_robot(urdf, lock=lock)
-    return _URDF_CACHE[key]
+    return _robot_cached(key, lambda: load_urdf_robot(urdf, lock=lock))
 
 
 def execute(spec: RunSpec) -> tuple[SimResult, dict]:
