@@ -19,18 +19,20 @@ TARGET_RUNS_PER_MIN = 1000.0
 
 
 def bench_throughput(n_plants: int = 100, duration: float = 10.0, workers=(1, 2), seed: int = 0,
-                     robot: str | None = None, progress=None) -> dict:
-    """Runs per minute of ``fbl,robust`` on ``n_plants`` plants for each worker count."""
+                     robot: str | None = None, progress=None, config: dict | None = None) -> dict:
+    """Runs per minute of ``fbl,robust`` on ``n_plants`` plants for each worker count (``config``: the
+    campaign's configuration, e.g. ``{"payload": {"mass": [0, 3]}, "simulation": {"rate": 1000}}``)."""
     from .jobs import columns, run_job
     from .runner import RunTable, run_many
     from .studies import montecarlo_jobs
 
     report = progress or (lambda msg: None)
-    jobs = montecarlo_jobs(n_plants, seed, ["fbl", "robust"], duration=duration, robot=robot)
-    run_job(montecarlo_jobs(1, seed, ["robust"], duration=0.01, robot=robot)[0])  # kernels loaded before forking
+    jobs = montecarlo_jobs(n_plants, seed, ["fbl", "robust"], duration=duration, robot=robot, config=config)
+    run_job(montecarlo_jobs(1, seed, ["robust"], duration=0.01, robot=robot, config=config)[0])  # kernels loaded
+    # before forking
     n = jobs[0].build().plant.n
     out = {"n_plants": n_plants, "runs": len(jobs), "duration_s": duration, "controllers": ["fbl", "robust"],
-           "seed": seed, "workers": {}}
+           "seed": seed, "robot": robot or "rr3", "config": config or {}, "workers": {}}
     for k in workers:
         report(f"throughput: {len(jobs)} runs of {duration:g} s on {k} worker(s) ...")
         with tempfile.TemporaryDirectory() as d:

@@ -107,6 +107,12 @@ def render_text(r: dict) -> str:
         lines += ["", _render_generic(r["generic"])]
     if "throughput" in r:
         lines += ["", _render_throughput(r["throughput"])]
+    if "throughput_ur5" in r:
+        lines += ["", _render_throughput(r["throughput_ur5"])]
+    if "design" in r:
+        from ..design.bench import render as render_design
+
+        lines += ["", render_design(r["design"])]
     lines.append("")
     lines.append(f"Correctness: {'all checks pass' if r['checks_ok'] else 'SOME CHECKS FAIL'}. "
                  f"Benchmark wall time {_si(r['total_wall_s'])}.")
@@ -133,7 +139,9 @@ def _render_throughput(t: dict) -> str:
     tail = [f"2 vs 1 worker(s): {t['speedup_2_vs_1']:.2f}x" if "speedup_2_vs_1" in t else "",
             f"target >= {tg['runs_per_min']:.0f} runs/min of 10 s: {tg['measured']:.0f} -> "
             f"{'met' if tg['met'] else 'NOT MET'} {tg['note']}".rstrip()]
-    return "\n".join([f"Campaign throughput: rc3r montecarlo jobs, {'/'.join(t['controllers'])} on {t['n_plants']} "
+    arm = t.get("robot", "rr3") + (" with a payload at 1 kHz" if t.get("config") else "")
+    return "\n".join([f"Campaign throughput ({arm}): rc3r montecarlo jobs, {'/'.join(t['controllers'])} on "
+                      f"{t['n_plants']} "
                       f"plants, {t['duration_s']:g} s each (pool start and fsynced rows included):",
                       _table(["workers", "runs", "wall", "runs/min"], rows, {1, 2, 3})] + [x for x in tail if x])
 
@@ -188,6 +196,12 @@ def cmd_bench(args) -> int:
 
     r["throughput"] = bench_throughput(n_plants=2 if quick else 100, duration=0.5 if quick else 10.0,
                                        progress=_progress)
+    r["throughput_ur5"] = bench_throughput(n_plants=2 if quick else 100, duration=0.5 if quick else 10.0,
+                                           robot="ur5", progress=_progress,
+                                           config={"payload": {"mass": [0.0, 3.0]}, "simulation": {"rate": 1000.0}})
+    from ..design.bench import bench_design
+
+    r["design"] = bench_design(quick=quick, progress=_progress)
     if getattr(args, "json", False):
         print(json.dumps(_jsonable(r), indent=2))
     else:
