@@ -41,6 +41,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.uncertainty.bounds``            theta_0 and rho: the paper's method, certified exact ranges
 ``rc3r.uncertainty.payload``           exact bounds for an unknown payload on the last link
 ``rc3r.uncertainty.sampled``           sampled lower bound on max ||theta - theta_0||
+``rc3r.uncertainty.ellipsoid``         plants drawn in an identification's ellipsoid (centre, random, boundary)
 ``rc3r.identify``                      identification from logs: bounds for the robust laws (docs/identification.md)
 ``rc3r.identify.log``                  logs (CSV, NPZ): loading and validation
 ``rc3r.identify.filtering``            resampling, zero-phase (parallel) low-pass, differentiation, cut-off from the data
@@ -80,6 +81,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.design.rule``                   the sampled-data rule and its fast form (the defaults of sampled runs)
 ``rc3r.design.verify``                 the fast form verified over the bounds at the rate and rate / margin (campaign runner)
 ``rc3r.design.report``                 ``design.toml``, ``design.md``, the figure
+``rc3r.design.bench``                  wall time of a default design (``rc3r bench``)
 ``rc3r.campaign``                      many runs: Monte Carlo over the box, eps sweep, rate map
 ``rc3r.campaign.jobs``                 :class:`Job` (one run, picklable) and :func:`run_job` (its row)
 ``rc3r.campaign.runner``               resumable row-by-row table, local process pool or Dask

@@ -351,7 +351,8 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
 
     plant = as_plant(plant)
     model = plant.rigid if model is None else model
-    if options.rate is not None and options.nsub is None:
+    auto_step = options.rate is not None and options.nsub is None
+    if auto_step:
         options = replace(options, nsub=default_substeps(plant, options.rate))
     _check_structure(plant, model, law, trajectory, loop, options)
     if x0 is None and loop is not None:
@@ -367,6 +368,11 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     S.raise_if_stopped()  # a signal during numba's compilation may have been swallowed there
     t0 = time.perf_counter()
     out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
+    careful = max(1, int(np.ceil((1.0 / options.rate) / EFFECT_SUBSTEP_S - 1e-9))) if auto_step else 0
+    if auto_step and options.nsub < careful and _too_fast(out, options):  # violent motion: the step is redone
+        options = replace(options, nsub=careful)
+        S.raise_if_stopped()
+        out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
     wall = time.perf_counter() - t0
     return replace(out, wall_time_s=wall, loop=None if loop is None else loop.describe())
 
@@ -384,10 +390,29 @@ EFFECT_SUBSTEP_S = 2.5e-4
 _NON_STIFF = ("saturation", "limits")
 
 
+#: Largest joint angle [rad] a default RK4 sub-step may cover (``max |qd| * h``) before a sampled run is
+#: redone with :data:`EFFECT_SUBSTEP_S` steps: a run whose motion turns violent (the eq. 7 law with a
+#: thin layer at 1 kHz reaches |qd| ~ 1450 rad/s and 1e7 N m on the 3R) needs the finer step (1 ms
+#: steps made it diverge; 0.25 ms ones agree with the reference engine, max|e| 1.2683 rad).
+MAX_STEP_ANGLE = 0.02
+
+
+def _too_fast(res, opt: SimOptions) -> bool:
+    """True if a sampled run on default sub-steps did not end ``ok`` or moved more than
+    :data:`MAX_STEP_ANGLE` per sub-step (then :func:`simulate` redoes it with finer steps)."""
+    if res.status not in ("ok",):
+        return res.status != "interrupted"
+    h = (1.0 / opt.rate) / opt.substeps
+    qd = np.abs(np.asarray(res.qd, dtype=float))
+    return bool(qd.size and np.nanmax(qd) * h > MAX_STEP_ANGLE)
+
+
 def default_substeps(plant, rate: float) -> int:
     """RK4 sub-steps per period of a sampled run on ``plant`` at ``rate`` [Hz] when ``SimOptions.nsub``
     is not given: steps of at most :data:`RIGID_SUBSTEP_S` for a rigid body (with saturation or limit
-    monitors), :data:`EFFECT_SUBSTEP_S` when another effect (friction) acts."""
+    monitors), :data:`EFFECT_SUBSTEP_S` when another effect (friction) acts. :func:`simulate` redoes a
+    run on the longer step with :data:`EFFECT_SUBSTEP_S` steps when it did not end ``ok`` or moved more
+    than :data:`MAX_STEP_ANGLE` per step."""
     from ..plants import as_plant
 
     effects = getattr(as_plant(plant), "effects", ())
