@@ -227,14 +227,12 @@ def _drawn(spec) -> bool:
     return kind in ("centre", "center", "random", "boundary")
 
 
-def _bounds_plant(nominal, path, spec: str):
-    """A plant drawn from the ellipsoid of an identification's ``bounds.toml``
-    (:func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`)."""
-    from .identify.bounds_file import load_bounds
+def _bounds_plant(nominal, bf: dict, spec: str):
+    """A plant drawn from the ellipsoid of an identification's ``bounds.toml`` (``bf``, read by
+    :func:`rc3r.identify.bounds_file.load_bounds`; :func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`)."""
     from .uncertainty.ellipsoid import draw_from_ellipsoid
 
-    bf = load_bounds(path, robot=nominal)
-    return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {path}")
+    return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}")
 
 
 def _payload_plant(nominal, payload, spec: str):
@@ -311,12 +309,11 @@ def _model(law_cls, plant, bounds: _Bounds, perturbed: bool, cfg: dict) -> dict:
     }
 
 
-def _file_model(law_cls, path, nominal) -> dict:
-    """The controller's model from an identification's ``bounds.toml`` (:func:`rc3r.identify.bounds_file.load_bounds`,
-    checked against the nominal robot's n, p and coefficient names)."""
-    from .identify.bounds_file import load_bounds
-
-    bf = load_bounds(path, robot=nominal)
+def _file_model(law_cls, bf: dict, nominal) -> dict:
+    """The controller's model from an identification's ``bounds.toml`` (``bf``, read by
+    :func:`rc3r.identify.bounds_file.load_bounds`, checked against the nominal robot's n, p and
+    coefficient names)."""
+    path = bf["source"]
     inputs = getattr(law_cls, "model_inputs", ())
     src = f"identified bounds {path} (confidence {bf.get('confidence')})"
     return {
@@ -400,11 +397,16 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         except ValueError:
             pass  # perturb() refuses the spec with its own message
     bounds_path = bounds if bounds is not None else cfg.get("bounds")
-    the_plant = (_bounds_plant(nominal, bounds_path, spec) if bounds_path is not None and _drawn(spec)
+    file_model = bounds_path is not None and model_cfg.get("theta") != "plant"
+    if bounds_path is not None and (file_model or _drawn(spec)):
+        from .identify.bounds_file import load_bounds
+
+        bounds_file = load_bounds(bounds_path, robot=nominal)  # read once: for the plant and for the model
+    the_plant = (_bounds_plant(nominal, bounds_file, spec) if bounds_path is not None and _drawn(spec)
                  else _plant(nominal, box_bounds, spec, seed))
     if bounds_path is not None:
-        perturbed = model_cfg.get("theta") != "plant"
-        model = _file_model(LAWS[kind], bounds_path, nominal) if perturbed else \
+        perturbed = file_model
+        model = _file_model(LAWS[kind], bounds_file, nominal) if perturbed else \
             _model(LAWS[kind], the_plant, box_bounds, False, model_cfg)
     else:
         model = _model(LAWS[kind], the_plant, box_bounds, perturbed, model_cfg)

@@ -153,7 +153,7 @@ class SimOptions:
         """RK4 sub-steps per sampling period."""
         if self.nsub is not None:
             return int(self.nsub)
-        return max(1, int(np.ceil((1.0 / self.rate) / 2.5e-4 - 1e-9))) if self.rate else 1
+        return _steps(self.rate, EFFECT_SUBSTEP_S) if self.rate else 1
 
     @property
     def mode(self) -> str:
@@ -368,7 +368,7 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     S.raise_if_stopped()  # a signal during numba's compilation may have been swallowed there
     t0 = time.perf_counter()
     out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
-    careful = max(1, int(np.ceil((1.0 / options.rate) / EFFECT_SUBSTEP_S - 1e-9))) if auto_step else 0
+    careful = _steps(options.rate, EFFECT_SUBSTEP_S) if auto_step else 0
     if auto_step and options.nsub < careful and _too_fast(out, options):  # violent motion: the step is redone
         options = replace(options, nsub=careful)
         S.raise_if_stopped()
@@ -400,7 +400,7 @@ MAX_STEP_ANGLE = 0.02
 def _too_fast(res, opt: SimOptions) -> bool:
     """True if a sampled run on default sub-steps did not end ``ok`` or moved more than
     :data:`MAX_STEP_ANGLE` per sub-step (then :func:`simulate` redoes it with finer steps)."""
-    if res.status not in ("ok",):
+    if res.status != "ok":
         return res.status != "interrupted"
     h = (1.0 / opt.rate) / opt.substeps
     qd = np.abs(np.asarray(res.qd, dtype=float))
@@ -417,6 +417,11 @@ def default_substeps(plant, rate: float) -> int:
 
     effects = getattr(as_plant(plant), "effects", ())
     h = RIGID_SUBSTEP_S if all(getattr(e, "name", "?") in _NON_STIFF for e in effects) else EFFECT_SUBSTEP_S
+    return _steps(rate, h)
+
+
+def _steps(rate: float, h: float) -> int:
+    """RK4 sub-steps of at most ``h`` [s] in one period of ``rate`` [Hz] (at least one)."""
     return max(1, int(np.ceil((1.0 / float(rate)) / h - 1e-9)))
 
 

@@ -338,6 +338,18 @@ def perturb(robot, box: Box, spec: str, *, simulable: bool = False):
     return out
 
 
+def spec_seed(spec: str, kind: str, arg: str, what: str) -> int:
+    """The seed ``arg`` of a plant spec ``kind:arg`` (``random:7``): an integer >= 0, else one
+    ConfigError ``"<what> '<spec>': '<kind>:' needs a seed >= 0, e.g. <kind>:0"``."""
+    try:
+        seed = int(arg)
+        if seed < 0:
+            raise ValueError
+    except ValueError:
+        raise ConfigError(f"{what} {spec!r}: '{kind}:' needs a seed >= 0, e.g. {kind}:0") from None
+    return seed
+
+
 def _perturb(robot, box: Box, spec, simulable: bool):
     if not isinstance(spec, str):
         raise ConfigError(f"perturbation spec must be a string, got {spec!r}")
@@ -364,13 +376,7 @@ def _perturb(robot, box: Box, spec, simulable: bool):
             )
         return shifted(robot, box.corner([c == "1" for c in bits]), s)
     if kind == "random":
-        try:
-            seed = int(arg)
-            if seed < 0:
-                raise ValueError
-        except ValueError:
-            raise ConfigError(f"bad perturbation {spec!r}: 'random:' needs a seed >= 0, e.g. random:0") from None
-        rng = np.random.default_rng(seed)
+        rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad perturbation"))
         for _ in range(10_000 if simulable else 1):
             out = shifted(robot, box.sample(rng, 1)[0], s)
             if not simulable or not _unsimulable(out):

@@ -244,13 +244,9 @@ def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bound
         return plant
     if kind not in ("random", "boundary"):
         raise ConfigError(f"bad plant {spec!r} with bounds from {source}: expected nominal, {ELLIPSOID_SPECS}")
-    try:
-        seed = int(arg)
-        if seed < 0:
-            raise ValueError
-    except ValueError:
-        raise ConfigError(f"bad plant {spec!r}: '{kind}:' needs a seed >= 0, e.g. {kind}:0") from None
-    rng = np.random.default_rng(seed)
+    from .box import spec_seed
+
+    rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad plant"))
     for _ in range(MAX_DRAWS):
         theta = draw_theta(theta0, P, rng, boundary=kind == "boundary")
         try:
