@@ -1,0 +1,723 @@
+r"""Generated dynamics kernels: symbolic (CasADi SX), common subexpressions eliminated, compiled C.
+
+For one serial (or tree) arm of 1-DoF revolute/prismatic joints, this module writes the
+recursive Newton--Euler algorithm, the composite-rigid-body algorithm and the Slotine--Li
+regressor on CasADi ``SX`` symbols from the chain's constants, with the arm's numeric standard
+parameters embedded (one arm, one library), eliminates common subexpressions
+(``casadi.cse``), generates C with ``casadi.CodeGenerator``, adds a small hand-written wrapper
+with batch entry points, compiles it with the system C compiler and loads it with
+:mod:`ctypes`. ``pinocchio.casadi`` is not used (the ``pin`` wheel has no CasADi bindings):
+the recursions are written here, and ``tests/test_generated.py`` checks them against
+Pinocchio's ``rnea``, ``crba``, ``computeCoriolisMatrix``, ``computeGeneralizedGravity``,
+``aba`` and the Slotine--Li regressor of :meth:`~rc3r.robots.pinocchio.PinocchioRobot.regressor_pinocchio`.
+
+Conventions (``docs/conventions.md``): SI units; spatial vectors ``(linear, angular)`` as in
+Pinocchio; every body's quantities in its own joint frame (Pinocchio's ``LOCAL``); standard
+parameters Pinocchio's ``(m, m c, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)`` per body, about the
+joint-frame origin in the joint frame. Joint ``j`` (parent ``lambda(j)``, fixed placement
+``(R0_j, p0_j)`` in its parent's frame, constant unit axis ``u_j`` in its own frame):
+
+* revolute: ``R_j = R0_j Rot(u_j, q_j)``, ``p_j = p0_j``, motion subspace ``S_j = (0, u_j)``;
+* prismatic: ``R_j = R0_j``, ``p_j = p0_j + R0_j u_j q_j``, ``S_j = (u_j, 0)``.
+
+Constants within 1e-14 of 0 or +-1 (``cos(pi/2)`` of a URDF ``rpy``) are snapped to them before
+the expressions are built, so that the products they enter vanish from the graph; the change is
+below 1e-14 relative and far inside the tests' tolerances.
+
+Functions (all per state; batch entry points loop over N states of row-major ``(N, n)`` arrays):
+
+``rnea(q, qd, qdd) -> tau``
+    ``tau = M(q) qdd + C(q, qd) qd + g(q)`` [N m or N], Newton--Euler with gravity.
+``slotine_li(q, qd, v, a) -> Y`` (n, p)
+    ``Y theta = M(q) a + C(q, qd) v + g(q)`` in the base parameters ``theta`` (``robot.theta``):
+    the Jacobian, with respect to symbolic standard parameters, of the polarized Newton--Euler
+    torque ``NE_g(q, (qd + v)/2, a/2) - NE_0(q, (qd - v)/2, -a/2)`` (:mod:`rc3r.robots.pinocchio`),
+    which is linear in them, so the Jacobian is exact; only the base columns
+    (``robot.base.independent``) are made symbolic, the others are zero.
+``mass(q) -> M`` (n, n)
+    Composite-rigid-body algorithm; symmetric (both triangles filled).
+``coriolis(q, qd) -> C`` (n, n)
+    The Christoffel matrix, ``C_ij = sum_k Gamma_ijk qd_k``: with ``c(q, x) = C(q, x) x`` the
+    Newton--Euler torque without gravity at zero acceleration, ``C(q, qd) = 1/2 dc/dx (q, qd)``
+    (``Gamma_ijk`` is symmetric in j, k); ``dM/dt - 2 C`` is skew-symmetric and ``C`` equals
+    ``pinocchio.computeCoriolisMatrix``.
+``gravity(q) -> g`` (n,)
+    Newton--Euler at ``qd = qdd = 0``.
+``aba(q, qd, tau) -> qdd`` (n,)
+    ``qdd = M(q)^{-1} (tau - rnea(q, qd, 0))``: M by the composite-rigid-body algorithm, the bias
+    by Newton--Euler, and a Cholesky factorization ``M = L L^T`` with its two triangular solves
+    unrolled into the same generated C (no pivoting: M is positive definite). Chosen over a
+    symbolic articulated-body recursion because it reuses the two recursions already checked
+    (``mass``, ``rnea``) so the expression graphs share their kinematics after CSE, and for
+    ``n <= 7`` CRBA + Cholesky costs about as much as ABA (Featherstone, *Rigid Body Dynamics
+    Algorithms*, 2008, Table 6.x); a state where M is not positive definite gives NaN.
+
+Cache: a library is kept under ``cache_dir/<key>/`` (default ``$RC3R_CACHE_DIR/kernels`` if that
+variable is set, else ``~/.cache/rc3r/kernels``), where ``key`` is a SHA-256 of the chain's
+constants and standard parameters (their float64 bytes), the base columns, the function list,
+the CasADi version, the compiler (name, ``--version`` first line) and flags, and the text of this
+file. Each entry is built in a temporary directory next to it and moved in by ``os.replace``,
+so a concurrent process sees either no entry or a complete one; a cache hit generates and
+compiles nothing. Compiler: ``$RC3R_CC``, else ``$CC``, else ``cc``.
+
+Not done yet: the compiled numba engine (:mod:`rc3r.simulate`) does not call these kernels.
+"""
+from __future__ import annotations
+
+import ctypes
+import functools
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError, ParameterError
+
+__all__ = ["GeneratedKernels", "FUNCTIONS", "DEFAULT_FLAGS", "default_cache_dir", "chain_constants"]
+
+#: The generated functions and their inputs, in this order.
+FUNCTIONS = {
+    "rnea": ("q", "qd", "qdd"),
+    "slotine_li": ("q", "qd", "v", "a"),
+    "mass": ("q",),
+    "coriolis": ("q", "qd"),
+    "gravity": ("q",),
+    "aba": ("q", "qd", "tau"),
+}
+
+#: Compiler flags (``-O3`` measured no faster, ``docs/generated.md``).
+DEFAULT_FLAGS = ("-O2", "-shared", "-fPIC")
+
+#: Bumped when the layout of a cache entry changes.
+_FORMAT = 1
+_LIB = "librc3r_gen.so"
+_SNAP = 1e-14
+
+
+def default_cache_dir() -> Path:
+    """``$RC3R_CACHE_DIR/kernels`` if that variable is set (non-empty), else ``~/.cache/rc3r/kernels``."""
+    base = os.environ.get("RC3R_CACHE_DIR")
+    return Path(base) / "kernels" if base else Path.home() / ".cache" / "rc3r" / "kernels"
+
+
+@dataclass(frozen=True)
+class Chain:
+    """The kinematic constants of a chain of 1-DoF joints (read by :func:`chain_constants`).
+
+    Attributes
+    ----------
+    parent : numpy.ndarray
+        (n,) int: joint index of each joint's parent, -1 for the base.
+    revolute : numpy.ndarray
+        (n,) bool: revolute (else prismatic).
+    R0, p0 : numpy.ndarray
+        (n, 3, 3), (n, 3): each joint's fixed placement in its parent's frame [-, m].
+    axis : numpy.ndarray
+        (n, 3): unit axis in the joint's own frame.
+    gravity : numpy.ndarray
+        (6,): ``model.gravity`` (linear [m/s^2], angular), in the base frame.
+    pi : numpy.ndarray
+        (n, 10): standard parameters (Pinocchio's order), about each joint-frame origin.
+    """
+
+    parent: np.ndarray
+    revolute: np.ndarray
+    R0: np.ndarray
+    p0: np.ndarray
+    axis: np.ndarray
+    gravity: np.ndarray
+    pi: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.parent.size)
+
+    def digest_bytes(self) -> bytes:
+        """The float64/int64 bytes of every constant (the cache key's model part)."""
+        parts = [self.parent.astype(np.int64), self.revolute.astype(np.int64), self.R0, self.p0, self.axis,
+                 self.gravity, self.pi]
+        return b"".join(np.ascontiguousarray(x, dtype=np.int64 if x.dtype.kind in "ib" else np.float64).tobytes()
+                        for x in parts)
+
+
+def _snap(x: np.ndarray) -> np.ndarray:
+    """Entries within 1e-14 of 0, 1 or -1 set to it."""
+    x = np.array(x, dtype=float)
+    for v in (0.0, 1.0, -1.0):
+        x[np.abs(x - v) < _SNAP] = v
+    return x
+
+
+def chain_constants(model, where: str = "model") -> Chain:
+    """The :class:`Chain` of a ``pinocchio.Model`` whose joints are all revolute or prismatic (1-DoF).
+
+    Raises
+    ------
+    ParameterError
+        A joint that is not 1-DoF (``nq == nv == 1``: a URDF ``continuous`` joint has nq = 2, a
+        floating base 7), a helical or other joint whose motion is not a pure rotation or
+        translation about a constant axis, or non-finite constants.
+    """
+    import pinocchio as pin
+
+    n = model.njoints - 1
+    if n < 1:
+        raise ParameterError(f"{where}: no moving joint")
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        if jm.nq != 1 or jm.nv != 1:
+            raise ParameterError(f"{where}: joint {j} '{model.names[j]}' ({jm.shortname()}) has nq={jm.nq}, "
+                                 f"nv={jm.nv}; generated kernels need 1-DoF revolute or prismatic joints")
+    data = model.createData()
+    pin.computeJointJacobians(model, data, pin.neutral(model))
+    parent, revolute = np.empty(n, dtype=np.int64), np.empty(n, dtype=bool)
+    R0, p0, axis, pi = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 10))
+    for j in range(n):
+        S = np.array(pin.getJointJacobian(model, data, j + 1, pin.LOCAL)[:, model.idx_vs[j + 1]])
+        rev = bool(np.linalg.norm(S[3:]) > 0.5)
+        if np.linalg.norm(S[:3] if rev else S[3:]) > 1e-12:
+            raise ParameterError(f"{where}: joint {j + 1} '{model.names[j + 1]}' ({model.joints[j + 1].shortname()}) "
+                                 "is neither a pure rotation nor a pure translation (helical?)")
+        placement = model.jointPlacements[j + 1]
+        parent[j], revolute[j] = model.parents[j + 1] - 1, rev
+        R0[j], p0[j] = placement.rotation, placement.translation
+        axis[j] = S[3:] if rev else S[:3]
+        pi[j] = model.inertias[j + 1].toDynamicParameters()
+    gravity = np.array(model.gravity.vector, dtype=float)
+    if not all(np.all(np.isfinite(x)) for x in (R0, p0, axis, pi, gravity)):
+        raise ParameterError(f"{where}: non-finite placements, axes, inertias or gravity")
+    return Chain(parent, revolute, R0, p0, axis, gravity, pi)
+
+
+# ---- the symbolic recursions --------------------------------------------------------------------
+
+
+class _Sym:
+    """The SX recursions of one chain (numeric constants snapped, :func:`_snap`)."""
+
+    def __init__(self, chain: Chain):
+        import casadi as cs
+
+        self.cs = cs
+        self.ch = chain
+        self.n = chain.n
+        self.R0 = [_snap(r) for r in chain.R0]
+        self.p0 = [_snap(p) for p in chain.p0]
+        self.u = [_snap(u) for u in chain.axis]
+        self.grav = _snap(chain.gravity)
+
+    # small vector helpers on SX columns
+    def _v(self, x):
+        return self.cs.SX(self.cs.DM(np.asarray(x, dtype=float).reshape(-1, 1)))
+
+    def _rot(self, j, q):
+        """Rot(u_j, q) (3, 3) SX; a signed coordinate axis written directly (no 1 - (1 - c) terms)."""
+        cs = self.cs
+        u = self.u[j]
+        c, s = cs.cos(q), cs.sin(q)
+        k = int(np.argmax(np.abs(u)))
+        if abs(u[k]) == 1.0 and np.count_nonzero(u) == 1:
+            s = s if u[k] > 0 else -s
+            R = cs.SX.eye(3)
+            a, b = [(1, 2), (2, 0), (0, 1)][k]
+            R[a, a], R[b, b], R[a, b], R[b, a] = c, c, -s, s
+            return R
+        K = np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
+        return c * cs.SX.eye(3) + s * cs.SX(cs.DM(K)) + (1 - c) * cs.SX(cs.DM(np.outer(u, u)))
+
+    def kinematics(self, q):
+        """``(R_j, p_j)``: joint j's frame in its parent's, SX (3, 3) and (3, 1)."""
+        cs = self.cs
+        out = []
+        for j in range(self.n):
+            R0 = cs.SX(cs.DM(self.R0[j]))
+            if self.ch.revolute[j]:
+                out.append((cs.mtimes(R0, self._rot(j, q[j])), self._v(self.p0[j])))
+            else:
+                out.append((R0, self._v(self.p0[j]) + cs.mtimes(R0, self._v(self.u[j])) * q[j]))
+        return out
+
+    def _S(self, j):
+        """(lin, ang) of the motion subspace of joint j in its frame, SX (3, 1) each."""
+        u, z = self._v(self.u[j]), self._v(np.zeros(3))
+        return (z, u) if self.ch.revolute[j] else (u, z)
+
+    def _to_child(self, R, p, v, w):
+        """A motion (v, w) at the parent's origin in its axes -> at the child's origin in its axes."""
+        cs = self.cs
+        return cs.mtimes(R.T, v + cs.cross(w, p)), cs.mtimes(R.T, w)
+
+    def _to_parent(self, R, p, f, m):
+        """A force (f, m) about the child's origin in its axes -> about the parent's in its axes."""
+        cs = self.cs
+        fp = cs.mtimes(R, f)
+        return fp, cs.mtimes(R, m) + cs.cross(p, fp)
+
+    @staticmethod
+    def _inertia_apply(cs, pi, v, w):
+        """``I (v, w) = (m v - h x w, h x v + I_O w)`` for ``pi = (m, h, xx, xy, yy, xz, yz, zz)``."""
+        m, h = pi[0], cs.vertcat(*pi[1:4])
+        xx, xy, yy, xz, yz, zz = pi[4:10]
+        Iw = cs.vertcat(xx * w[0] + xy * w[1] + xz * w[2], xy * w[0] + yy * w[1] + yz * w[2],
+                        xz * w[0] + yz * w[1] + zz * w[2])
+        return m * v - cs.cross(h, w), cs.cross(h, v) + Iw
+
+    def body_forces(self, kin, x, b, pi, gravity: bool):
+        """Per body the Newton--Euler force ``I A + V x* (I V)`` at joint velocities x, accelerations b."""
+        cs = self.cs
+        V, A, F = [None] * self.n, [None] * self.n, [None] * self.n
+        for j in range(self.n):
+            R, p = kin[j]
+            lam = int(self.ch.parent[j])
+            if lam < 0:
+                z = self._v(np.zeros(3))
+                vp, wp = z, z
+                g = -self.grav if gravity else np.zeros(6)
+                ap, alp = self._v(g[:3]), self._v(g[3:])
+            else:
+                (vp, wp), (ap, alp) = V[lam], A[lam]
+            v, w = self._to_child(R, p, vp, wp)
+            a, al = self._to_child(R, p, ap, alp)
+            Sl, Sa = self._S(j)
+            xl, xa = Sl * x[j], Sa * x[j]
+            v, w = v + xl, w + xa
+            a = a + Sl * b[j] + cs.cross(w, xl) + cs.cross(v, xa)
+            al = al + Sa * b[j] + cs.cross(w, xa)
+            V[j], A[j] = (v, w), (a, al)
+            fa, na = self._inertia_apply(cs, pi[j], a, al)
+            fv, nv = self._inertia_apply(cs, pi[j], v, w)
+            F[j] = (fa + cs.cross(w, fv), na + cs.cross(w, nv) + cs.cross(v, fv))
+        return F
+
+    def backward(self, kin, F):
+        """Joint torques ``tau_j = S_j . f_j`` with the forces of the subtree carried to each joint."""
+        cs = self.cs
+        F = list(F)
+        tau = [None] * self.n
+        for j in range(self.n - 1, -1, -1):
+            f, m = F[j]
+            Sl, Sa = self._S(j)
+            tau[j] = cs.dot(Sl, f) + cs.dot(Sa, m)
+            lam = int(self.ch.parent[j])
+            if lam >= 0:
+                R, p = kin[j]
+                fp, mp = self._to_parent(R, p, f, m)
+                F[lam] = (F[lam][0] + fp, F[lam][1] + mp)
+        return cs.vertcat(*tau)
+
+    def numeric_pi(self):
+        return [[float(x) for x in row] for row in self.ch.pi]
+
+    def rnea(self, q, x, b, pi=None, gravity=True):
+        kin = self.kinematics(q)
+        return self.backward(kin, self.body_forces(kin, x, b, pi or self.numeric_pi(), gravity))
+
+    def slotine_li(self, q, qd, v, a, columns):
+        """``Y`` (n, p): d/d theta of the polarized Newton--Euler torque (module docstring)."""
+        cs = self.cs
+        th = cs.SX.sym("theta", len(columns))
+        pi = [[0.0] * 10 for _ in range(self.n)]
+        for k, c in enumerate(columns):
+            pi[int(c) // 10][int(c) % 10] = th[k]
+        kin = self.kinematics(q)
+        F1 = self.body_forces(kin, 0.5 * (qd + v), 0.5 * a, pi, True)
+        F2 = self.body_forces(kin, 0.5 * (qd - v), -0.5 * a, pi, False)
+        tau = self.backward(kin, [(f1 - f2, m1 - m2) for (f1, m1), (f2, m2) in zip(F1, F2)])
+        return cs.jacobian(tau, th)
+
+    def _spatial_inertia(self, pi):
+        """6 x 6 (lin, ang) spatial inertia of ``pi`` (numeric): [[m 1, -[h]x], [[h]x, I_O]]."""
+        m, h = pi[0], np.asarray(pi[1:4])
+        xx, xy, yy, xz, yz, zz = pi[4:10]
+        H = np.array([[0, -h[2], h[1]], [h[2], 0, -h[0]], [-h[1], h[0], 0]])
+        return np.block([[m * np.eye(3), -H], [H, np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])]])
+
+    def mass(self, q):
+        """M (n, n) by the composite-rigid-body algorithm in the joint frames."""
+        cs = self.cs
+        kin = self.kinematics(q)
+        n = self.n
+        Ic = [cs.SX(cs.DM(self._spatial_inertia(self.ch.pi[j]))) for j in range(n)]
+        X = []
+        for R, p in kin:  # parent motion -> child motion, (lin, ang)
+            P = cs.skew(p)
+            X.append(cs.blockcat([[R.T, -cs.mtimes(R.T, P)], [cs.SX(3, 3), R.T]]))
+        for j in range(n - 1, -1, -1):
+            lam = int(self.ch.parent[j])
+            if lam >= 0:
+                Ic[lam] = Ic[lam] + cs.mtimes([X[j].T, Ic[j], X[j]])
+        M = cs.SX(n, n)
+        for j in range(n):
+            Sj = cs.vertcat(*self._S(j))
+            F = cs.mtimes(Ic[j], Sj)
+            M[j, j] = cs.dot(Sj, F)
+            i = j
+            while int(self.ch.parent[i]) >= 0:
+                F = cs.mtimes(X[i].T, F)
+                i = int(self.ch.parent[i])
+                M[i, j] = cs.dot(cs.vertcat(*self._S(i)), F)
+                M[j, i] = M[i, j]
+        return M
+
+    def coriolis(self, q, qd):
+        """The Christoffel C (n, n): half the Jacobian of ``C(q, qd) qd`` with respect to qd."""
+        c = self.rnea(q, qd, self.cs.SX.zeros(self.n), gravity=False)
+        return 0.5 * self.cs.jacobian(c, qd)
+
+    def aba(self, q, qd, tau):
+        """``M^{-1} (tau - rnea(q, qd, 0))`` by an unrolled Cholesky factorization."""
+        cs = self.cs
+        n = self.n
+        M = self.mass(q)
+        rhs = tau - self.rnea(q, qd, cs.SX.zeros(n))
+        L = [[None] * n for _ in range(n)]
+        for j in range(n):
+            d = M[j, j]
+            for k in range(j):
+                d = d - L[j][k] * L[j][k]
+            L[j][j] = cs.sqrt(d)
+            for i in range(j + 1, n):
+                s = M[i, j]
+                for k in range(j):
+                    s = s - L[i][k] * L[j][k]
+                L[i][j] = s / L[j][j]
+        y = [None] * n
+        for i in range(n):
+            s = rhs[i]
+            for k in range(i):
+                s = s - L[i][k] * y[k]
+            y[i] = s / L[i][i]
+        x = [None] * n
+        for i in range(n - 1, -1, -1):
+            s = y[i]
+            for k in range(i + 1, n):
+                s = s - L[k][i] * x[k]
+            x[i] = s / L[i][i]
+        return cs.vertcat(*x)
+
+
+def _functions(chain: Chain, columns, names):
+    """The CasADi Functions ``rc3r_k_<name>`` (CSE'd, dense outputs laid out row-major) and
+    their output shapes."""
+    import casadi as cs
+
+    sym = _Sym(chain)
+    n = chain.n
+    ins = {k: cs.SX.sym(k, n) for k in ("q", "qd", "qdd", "v", "a", "tau")}
+    build = {
+        "rnea": lambda: sym.rnea(ins["q"], ins["qd"], ins["qdd"]),
+        "slotine_li": lambda: sym.slotine_li(ins["q"], ins["qd"], ins["v"], ins["a"], columns).T,
+        "mass": lambda: sym.mass(ins["q"]),
+        "coriolis": lambda: sym.coriolis(ins["q"], ins["qd"]).T,
+        "gravity": lambda: sym.rnea(ins["q"], cs.SX.zeros(n), cs.SX.zeros(n)),
+        "aba": lambda: sym.aba(ins["q"], ins["qd"], ins["tau"]),
+    }
+    shapes = {"rnea": (n,), "slotine_li": (n, len(columns)), "mass": (n, n), "coriolis": (n, n),
+              "gravity": (n,), "aba": (n,)}
+    out = {}
+    for name in names:
+        expr = cs.cse(cs.densify(build[name]()))  # transposed where needed: column-major = row-major of the result
+        out[name] = cs.Function(f"rc3r_k_{name}", [ins[k] for k in FUNCTIONS[name]], [cs.vec(expr)])
+    return out, shapes
+
+
+def _wrapper(funcs) -> str:
+    """The hand-written batch entry points ``void rc3r_gen_<name>_batch(int N, const double *in0, ..., double *out)``."""
+    parts = ["/* rc3r generated kernels: batch entry points (rc3r.robots.generated) */",
+             "#include <stdlib.h>", "#include <math.h>", "typedef long long int casadi_int;", ""]
+    for name, f in funcs.items():
+        nin, nout = f.n_in(), f.nnz_out(0)
+        sizes = [f.size1_in(i) for i in range(nin)]
+        parts.append(f"int rc3r_k_{name}(const double** arg, double** res, casadi_int* iw, double* w, int mem);")
+        args = ", ".join(f"const double *in{i}" for i in range(nin))
+        sz_w, sz_iw = max(int(f.sz_w()), 1), max(int(f.sz_iw()), 1)
+        sets = "\n".join(f"        arg[{i}] = in{i} + (size_t)s * {sizes[i]};" for i in range(nin))
+        parts.append(f"""void rc3r_gen_{name}_batch(int N, {args}, double *out) {{
+    const double *arg[{max(int(f.sz_arg()), nin)}] = {{0}};
+    double *res[{max(int(f.sz_res()), 1)}] = {{0}};
+    double *w = (double *)malloc(sizeof(double) * {sz_w});
+    casadi_int *iw = (casadi_int *)malloc(sizeof(casadi_int) * {sz_iw});
+    if (!w || !iw) {{
+        for (long k = 0; k < (long)N * {nout}; k++) out[k] = NAN;
+        free(w); free(iw); return;
+    }}
+    for (int s = 0; s < N; s++) {{
+{sets}
+        res[0] = out + (size_t)s * {nout};
+        rc3r_k_{name}(arg, res, iw, w, 0);
+    }}
+    free(w); free(iw);
+}}
+""")
+    return "\n".join(parts)
+
+
+# ---- compiler and cache -------------------------------------------------------------------------
+
+
+def _compiler(compiler: str | None) -> str:
+    return compiler or os.environ.get("RC3R_CC") or os.environ.get("CC") or "cc"
+
+
+@functools.lru_cache(maxsize=8)
+def _compiler_id(compiler: str) -> tuple[str, str]:
+    """(absolute path, first line of ``--version``) of the C compiler; ConfigError if it is missing."""
+    path = shutil.which(compiler)
+    if path is None:
+        raise ConfigError(f"C compiler {compiler!r} not found: generated kernels need one "
+                          "(install cc/gcc/clang or set RC3R_CC)")
+    try:
+        out = subprocess.run([path, "--version"], capture_output=True, text=True, timeout=60)
+        line = (out.stdout or out.stderr).strip().splitlines()
+    except (OSError, subprocess.SubprocessError) as exc:
+        raise ConfigError(f"C compiler {compiler!r} ({path}) does not run: {type(exc).__name__}") from None
+    return path, line[0] if line else ""
+
+
+def _this_source() -> bytes:
+    return Path(__file__).read_bytes()
+
+
+def cache_key(chain: Chain, columns, names, compiler: str, flags) -> str:
+    """SHA-256 (hex) of everything the library depends on (module docstring)."""
+    import casadi as cs
+
+    path, version = _compiler_id(compiler)
+    h = hashlib.sha256()
+    for part in (f"rc3r-generated-{_FORMAT}".encode(), chain.digest_bytes(),
+                 np.asarray(columns, dtype=np.int64).tobytes(), ",".join(names).encode(), cs.__version__.encode(),
+                 compiler.encode(), path.encode(), version.encode(), "\0".join(flags).encode(), _this_source()):
+        h.update(len(part).to_bytes(8, "little"))
+        h.update(part)
+    return h.hexdigest()
+
+
+def _compile(cc: str, flags, sources, target: Path, cwd: Path) -> float:
+    t0 = time.perf_counter()
+    try:
+        proc = subprocess.run([cc, *flags, "-o", str(target), *map(str, sources), "-lm"], cwd=cwd,
+                              capture_output=True, text=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot run the C compiler {cc!r}: {exc.strerror or type(exc).__name__}") from None
+    if proc.returncode != 0:
+        lines = [ln.strip() for ln in (proc.stderr or proc.stdout).splitlines() if ln.strip()]
+        first = next((ln for ln in lines if "error" in ln.lower()), lines[0] if lines else "no message")
+        raise ConfigError(f"compiling the generated kernels with {cc} failed (exit {proc.returncode}): {first[:300]}")
+    return time.perf_counter() - t0
+
+
+class GeneratedKernels:
+    """Compiled C kernels of one arm: ``rnea``, ``slotine_li``, ``mass``, ``coriolis``, ``gravity``, ``aba``.
+
+    Build with :meth:`for_robot` or :meth:`for_model`. Every method takes (n,) or (N, n) float arrays
+    (broadcast against each other) and returns the shape of the corresponding
+    :class:`~rc3r.robots.pinocchio.PinocchioRobot` method: (n,) / (N, n), (n, n) / (N, n, n), or
+    (n, p) / (N, n, p). The batch calls release the GIL (ctypes).
+
+    Attributes
+    ----------
+    key : str
+        SHA-256 of the cache entry (module docstring).
+    library_path, source_path : pathlib.Path
+        The shared library and the CasADi-generated C file.
+    compile_seconds, generate_seconds : float
+        Wall time of the compiler and of building + CSE + code generation; 0.0 when loaded from the cache.
+    n, p : int
+        Joints, base parameters (columns of ``slotine_li``).
+    columns : numpy.ndarray
+        (p,) the standard-parameter columns of ``slotine_li`` (``robot.base.independent``).
+    """
+
+    def __init__(self, directory: Path, key: str, meta: dict, compile_seconds: float, generate_seconds: float):
+        self.key = key
+        self.directory = Path(directory)
+        self.library_path = self.directory / _LIB
+        self.source_path = self.directory / meta["source"]
+        self.wrapper_path = self.directory / meta["wrapper"]
+        self.compile_seconds = float(compile_seconds)
+        self.generate_seconds = float(generate_seconds)
+        self.meta = meta
+        self.n, self.p = int(meta["n"]), int(meta["p"])
+        self.columns = np.asarray(meta["columns"], dtype=np.int64)
+        self.functions = tuple(meta["functions"])
+        self._lib = ctypes.CDLL(str(self.library_path))
+        self._fns = {}
+        for name in self.functions:
+            fn = getattr(self._lib, f"rc3r_gen_{name}_batch")
+            fn.restype = None
+            fn.argtypes = [ctypes.c_int] + [ctypes.c_void_p] * (len(FUNCTIONS[name]) + 1)
+            self._fns[name] = fn
+
+    # ---- construction -----------------------------------------------------------------
+    @classmethod
+    def for_robot(cls, robot, cache_dir=None, functions=None, compiler: str | None = None,
+                  flags=None) -> "GeneratedKernels":
+        """The kernels of a :class:`~rc3r.robots.pinocchio.PinocchioRobot` (its model, standard
+        parameters and base columns ``robot.base.independent``), from the cache or built.
+
+        Parameters
+        ----------
+        robot : PinocchioRobot
+            Any object with ``.model`` (pinocchio.Model) and ``.base.independent``.
+        cache_dir : path, optional
+            Default :func:`default_cache_dir`.
+        functions : sequence of str, optional
+            A subset of :data:`FUNCTIONS` (default all).
+        compiler : str, optional
+            C compiler; default ``$RC3R_CC``, ``$CC`` or ``cc``.
+        flags : sequence of str, optional
+            Compiler flags, default :data:`DEFAULT_FLAGS` (must produce a shared library).
+
+        Raises
+        ------
+        ParameterError
+            Not an arm of 1-DoF revolute/prismatic joints, or base columns out of range.
+        ConfigError
+            CasADi missing, no C compiler, or the compilation failed (one line each).
+        """
+        model = getattr(robot, "model", None)
+        base = getattr(robot, "base", None)
+        if model is None or base is None or not hasattr(base, "independent"):
+            raise ParameterError(f"{type(robot).__name__} has no pinocchio model and base columns: "
+                                 "use a PinocchioRobot (or GeneratedKernels.for_model)")
+        return cls.for_model(model, base.independent, cache_dir=cache_dir, functions=functions, compiler=compiler,
+                             flags=flags, where=getattr(robot, "robot_name", "robot"))
+
+    @classmethod
+    def for_model(cls, model, columns, cache_dir=None, functions=None, compiler: str | None = None,
+                  flags=None, where: str = "model") -> "GeneratedKernels":
+        """The kernels of a ``pinocchio.Model`` with Slotine--Li ``columns`` (indices among its 10 nb
+        standard parameters); see :meth:`for_robot`."""
+        try:
+            import casadi as cs
+        except ImportError:
+            raise ConfigError("generated kernels need CasADi: pip install 'casadi>=3.6'") from None
+        chain = chain_constants(model, where)
+        columns = np.asarray(columns, dtype=np.int64).ravel()
+        if columns.size == 0 or columns.min() < 0 or columns.max() >= 10 * chain.n or np.unique(columns).size != columns.size:
+            raise ParameterError(f"{where}: base columns must be distinct indices in [0, {10 * chain.n}), "
+                                 f"got {columns.size} of them")
+        names = tuple(FUNCTIONS) if functions is None else tuple(functions)
+        unknown = [f for f in names if f not in FUNCTIONS]
+        if unknown or not names:
+            raise ParameterError(f"unknown generated function(s) {unknown} (known: {', '.join(FUNCTIONS)})")
+        cc = _compiler(compiler)
+        flags = tuple(DEFAULT_FLAGS if flags is None else flags)
+        key = cache_key(chain, columns, names, cc, flags)
+        root = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+        final = root / key
+        meta = cls._read_meta(final)
+        if meta is not None:
+            return cls(final, key, meta, 0.0, 0.0)
+        try:
+            root.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ConfigError(f"cannot create the kernel cache {root}: {exc.strerror or exc}") from None
+        t0 = time.perf_counter()
+        funcs, shapes = _functions(chain, columns, names)
+        gen = cs.CodeGenerator("rc3r_kernels.c", {"with_header": False})
+        for f in funcs.values():
+            gen.add(f)
+        source, wrapper = gen.dump(), _wrapper(funcs)
+        generate_seconds = time.perf_counter() - t0
+        tmp = Path(tempfile.mkdtemp(prefix=f".{key[:12]}-", dir=root))
+        try:
+            (tmp / "rc3r_kernels.c").write_text(source)
+            (tmp / "rc3r_wrap.c").write_text(wrapper)
+            compile_seconds = _compile(cc, flags, ["rc3r_kernels.c", "rc3r_wrap.c"], tmp / _LIB, tmp)
+            meta = {"format": _FORMAT, "n": chain.n, "p": int(columns.size), "columns": columns.tolist(),
+                    "functions": list(names), "shapes": {k: list(shapes[k]) for k in names},
+                    "instructions": {k: int(f.n_instructions()) for k, f in funcs.items()},
+                    "casadi": cs.__version__, "compiler": list(_compiler_id(cc)), "flags": list(flags),
+                    "source": "rc3r_kernels.c", "wrapper": "rc3r_wrap.c",
+                    "generate_seconds": generate_seconds, "compile_seconds": compile_seconds, "where": where}
+            (tmp / "meta.json").write_text(json.dumps(meta, indent=1))
+            try:
+                os.replace(tmp, final)  # atomic; fails if another process put the entry there first
+            except OSError:
+                other = cls._read_meta(final)
+                if other is not None:  # a concurrent build won: use it
+                    shutil.rmtree(tmp, ignore_errors=True)
+                    return cls(final, key, other, 0.0, 0.0)
+                shutil.rmtree(final, ignore_errors=True)  # an incomplete entry (a library deleted by hand)
+                try:
+                    os.replace(tmp, final)
+                except OSError as exc:
+                    raise ConfigError(f"cannot move the compiled kernels into the cache {final}: "
+                                      f"{exc.strerror or exc}") from None
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        return cls(final, key, meta, compile_seconds, generate_seconds)
+
+    @staticmethod
+    def _read_meta(directory: Path):
+        """The entry's metadata if it is complete (``meta.json`` and the library), else None."""
+        try:
+            meta = json.loads((directory / "meta.json").read_text())
+        except (OSError, ValueError):
+            return None
+        return meta if meta.get("format") == _FORMAT and (directory / _LIB).is_file() else None
+
+    # ---- evaluation -------------------------------------------------------------------
+    def _call(self, name: str, *xs) -> np.ndarray:
+        if name not in self._fns:
+            raise ConfigError(f"{name} was not generated for this library (functions: {', '.join(self.functions)})")
+        xs = [np.asarray(x, dtype=float) for x in xs]
+        if any(x.shape != xs[0].shape for x in xs):
+            xs = np.broadcast_arrays(*xs)
+        shape, n = xs[0].shape, self.n
+        if shape[-1:] != (n,) or len(shape) > 2:
+            raise ValueError(f"states must have shape ({n},) or (N, {n}), got {shape}")
+        single = len(shape) == 1
+        xs = [np.ascontiguousarray(x.reshape(-1, n), dtype=np.float64) for x in xs]
+        N = xs[0].shape[0]
+        out_shape = tuple(self.meta["shapes"][name])
+        out = np.empty((N,) + out_shape)
+        self._fns[name](N, *(x.ctypes.data for x in xs), out.ctypes.data)
+        return out[0] if single else out
+
+    def rnea(self, q, qd, qdd) -> np.ndarray:
+        """Inverse dynamics ``tau = M(q) qdd + C(q, qd) qd + g(q)`` [N m or N], (n,) or (N, n).
+
+        q [rad or m], qd, qdd: (n,) or (N, n). Equals ``pinocchio.rnea`` (with the model's gravity).
+        """
+        return self._call("rnea", q, qd, qdd)
+
+    def slotine_li(self, q, qd, v, a) -> np.ndarray:
+        """Slotine--Li regressor in the base parameters, (n, p) or (N, n, p).
+
+        Identity: ``slotine_li(q, qd, v, a) @ robot.theta == M(q) a + C(q, qd) v + g(q)``; equals
+        ``robot.regressor`` and ``robot.regressor_pinocchio`` (columns ``robot.base.independent``).
+        """
+        return self._call("slotine_li", q, qd, v, a)
+
+    def mass(self, q) -> np.ndarray:
+        """Joint-space inertia M(q), (n, n) or (N, n, n), symmetric positive definite (``pinocchio.crba``)."""
+        return self._call("mass", q)
+
+    def coriolis(self, q, qd) -> np.ndarray:
+        """Christoffel matrix C(q, qd), (n, n) or (N, n, n): ``C qd`` is the Coriolis/centrifugal torque,
+        ``dM/dt - 2 C`` is skew-symmetric (``pinocchio.computeCoriolisMatrix``)."""
+        return self._call("coriolis", q, qd)
+
+    def gravity(self, q) -> np.ndarray:
+        """Generalized gravity g(q) [N m or N], (n,) or (N, n) (``pinocchio.computeGeneralizedGravity``)."""
+        return self._call("gravity", q)
+
+    def aba(self, q, qd, tau) -> np.ndarray:
+        """Forward dynamics ``qdd = M(q)^{-1} (tau - C(q, qd) qd - g(q))``, (n,) or (N, n) (``pinocchio.aba``);
+        NaN where M is not positive definite."""
+        return self._call("aba", q, qd, tau)
+
+    forward_dynamics = aba
+
+    def __repr__(self) -> str:
+        return f"<GeneratedKernels n={self.n} p={self.p} key={self.key[:12]} {self.library_path}>"
