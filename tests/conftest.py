@@ -7,6 +7,10 @@ import numpy as np
 import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
+# The suite compiles what it runs, so that "auto" picks the same engine whatever ran before; the cold
+# start (a short run on the python engine while numba's cache is cold) is tested in subprocesses
+# that unset this (tests/test_cold_start.py).
+os.environ["RC3R_COLD_START"] = "compile"
 
 #: One seed for the whole suite; change it to re-roll every random test.
 SEED = 20241122

@@ -232,20 +232,20 @@ def test_instantiation_is_written_once_and_cached(tmp_path):
 
 
 def test_is_cached_looks_only_at_the_integrator_the_run_needs(tmp_path, monkeypatch, capsys):
-    """A sampled-only history (the sampled integrator's numba index on disk, the continuous one's not):
-    is_cached("sampled") is True, is_cached("continuous") and is_cached() False, and the command line's
-    compile announcement is silent for a sampled run and speaks for a continuous one."""
+    """A sampled-only history (the sampled integrator's numba index holds an entry valid for this source,
+    the continuous one's none): is_cached("sampled") is True, is_cached("continuous") and is_cached()
+    False, and the command line's compile announcement is silent for a sampled run and speaks for a
+    continuous one."""
     from types import SimpleNamespace
 
     from rc3r.cli.run import announce_compile
     from rc3r.simulate import _fast
 
-    (tmp_path / "s.nbi").write_text("")
+    def disp(index):
+        return SimpleNamespace(overloads={}, _cache=SimpleNamespace(
+            _cache_file=SimpleNamespace(_load_index=lambda: dict(index))))
 
-    def disp(path):
-        return SimpleNamespace(_cache=SimpleNamespace(_cache_file=SimpleNamespace(_index_path=str(path))))
-
-    fake = SimpleNamespace(integrate_sampled=disp(tmp_path / "s.nbi"), integrate_continuous=disp(tmp_path / "c.nbi"))
+    fake = SimpleNamespace(integrate_sampled=disp({("sig",): "entry"}), integrate_continuous=disp({}))
     monkeypatch.setattr(_fast, "instantiate", lambda module: fake)
     eng = _fast.CompiledSimulator("x")
     assert eng.is_cached("sampled") and not eng.is_cached("continuous") and not eng.is_cached()

@@ -19,7 +19,7 @@ import functools
 import hashlib
 from pathlib import Path
 
-__all__ = ["package_hash", "install", "PACKAGE_DIR"]
+__all__ = ["package_hash", "install", "PACKAGE_DIR", "ready", "cold_start_policy", "ready_or_python"]
 
 #: The directory of the installed ``rc3r`` package.
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -83,3 +83,55 @@ def install() -> bool:
     classes[0:0] = ours
     _INSTALLED.extend(ours)
     return True
+
+
+def _index_valid(dispatcher) -> bool:
+    """True if numba's disk cache holds a valid entry (this source stamp, this numba) for ``dispatcher``."""
+    cache = getattr(dispatcher, "_cache", None)
+    cache_file = getattr(cache, "_cache_file", None)
+    if cache_file is None:  # cache=False, or numba's internals moved: cannot tell
+        return True
+    try:
+        return bool(cache_file._load_index())
+    except Exception:  # noqa: BLE001 - an internal of numba; unreadable means "cannot tell"
+        return True
+
+
+_DISK: dict = {}
+
+
+def ready(dispatcher) -> bool:
+    """True if a call of the numba ``dispatcher`` compiles nothing: it has a compiled overload in this
+    process, or numba's disk cache holds a valid one (read once per process and dispatcher).
+
+    Reads numba's cache index (``_cache._cache_file._load_index``, numba 0.59-0.68); if that cannot
+    be read, answers True (behave as without this check).
+    """
+    if getattr(dispatcher, "overloads", None):
+        return True
+    key = id(dispatcher)
+    if key not in _DISK:
+        _DISK[key] = _index_valid(dispatcher)
+    return _DISK[key]
+
+
+def cold_start_policy() -> str:
+    """``"python"`` (default) or ``"compile"``: the environment variable ``RC3R_COLD_START``.
+
+    ``python``: a short run whose compiled kernels are not built yet runs on code that needs no
+    compilation (Pinocchio and plain Python), so a fresh install's first run takes seconds instead
+    of the one-off numba compilation (1-2 minutes of CPU for a 6-joint arm); ``compile``: build
+    them (what campaigns do before their jobs: :func:`rc3r.study.prepare`).
+    """
+    import os
+
+    value = os.environ.get("RC3R_COLD_START", "python").strip().lower()
+    return "compile" if value == "compile" else "python"
+
+
+def ready_or_python(dispatcher):
+    """``dispatcher`` if calling it compiles nothing (:func:`ready`) or the policy is ``compile``, else its
+    plain-Python function (``dispatcher.py_func``: the same arithmetic, interpreted)."""
+    if cold_start_policy() == "compile" or ready(dispatcher):
+        return dispatcher
+    return getattr(dispatcher, "py_func", dispatcher)

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ._numba_cache import ready_or_python
+
 from .errors import ConfigError
 
 __all__ = ["Trajectory", "Sines", "Quintic", "trajectory_from_config", "reference_into"]
@@ -95,8 +97,9 @@ class Trajectory:
         tp = self.pack()
         ts = np.atleast_1d(np.asarray(t, dtype=float))
         out = np.empty((ts.size, 3, self.n))
+        fill = reference_into if ts.size > 100_000 else ready_or_python(reference_into)  # cold: interpreted
         for n, tn in enumerate(ts):
-            reference_into(tp, float(tn), out[n])
+            fill(tp, float(tn), out[n])
         if np.ndim(t) == 0:
             return out[0, 0], out[0, 1], out[0, 2]
         return out[:, 0], out[:, 1], out[:, 2]

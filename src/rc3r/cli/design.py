@@ -89,7 +89,7 @@ def cmd_design(args) -> int:
     from ..campaign import RunTable, columns
     from ..design.report import design_figure, design_markdown, design_toml
     from ..design.verify import design_config, verify_design
-    from ..study import build_run
+    from ..study import build_run, prepare
     from .run import announce_compile, plant_options
 
     if args.scheduler is not None and args.workers is not None:
@@ -114,6 +114,7 @@ def cmd_design(args) -> int:
           f"{args.margin:g}), {args.n} random plants, {first.options.duration:g} s each, on {where} -> {out}/",
           file=sys.stderr)
     announce_compile(first.plant, float(args.rate))
+    prepare(first)  # compile once here: the jobs alone are short enough to pass a cold engine over
     t0 = time.perf_counter()
     with output_dir(out, own=DESIGN_ENTRIES) as tmp:
         bar = _Bar()

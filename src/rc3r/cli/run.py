@@ -33,6 +33,23 @@ def announce_compile(plant, rate=False) -> None:
         _progress(f"rc3r: compiling the simulator's kernels (numba): {what}, once; cached on disk afterwards")
 
 
+def announce_engine(spec) -> None:
+    """:func:`announce_compile` if the run will compile its simulator; if ``auto`` takes the python engine
+    because the compiled one is not built yet (a short sampled run, :func:`rc3r.simulate.planned_engine`),
+    say that and how to build it."""
+    from ..simulate import planned_engine
+
+    name, why = planned_engine(spec.true_plant if spec.true_plant is not None else spec.plant, spec.law,
+                               spec.options)
+    if why is not None:
+        from ..simulate.engines.base import COLD_MAX_SUBSTEPS
+
+        _progress(f"rc3r: python engine: the compiled one is passed over, {why}; a run of over "
+                  f"{COLD_MAX_SUBSTEPS} sub-steps, --engine fast or RC3R_COLD_START=compile builds it (once)")
+    elif name == "fast":
+        announce_compile(spec.plant, spec.options.rate)
+
+
 def _fmt3(x) -> str:
     return " ".join(f"{v:.3g}" for v in x)
 
@@ -123,7 +140,7 @@ def cmd_run(args) -> int:
         from ..animation import check_animatable, frame_count
 
         check_animatable(spec.plant, fmt)  # before anything is announced or simulated
-    announce_compile(spec.plant, spec.options.rate)
+    announce_engine(spec)
     for warning in spec.warnings:
         _progress(f"rc3r: warning: {warning}")
     _progress(f"rc3r run: {spec.name}: {describe_model(spec)}; {spec.options.mode}"

@@ -28,6 +28,7 @@ from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..provenance import provenance
 from . import EXIT
 from ._output import check_output_path, locked
+from ..study import prepare
 from .run import announce_compile
 
 
@@ -91,6 +92,7 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
                       file=sys.stderr)
             print(f"rc3r {kind}: {len(jobs)} runs, {done} already done, on {where} -> {out}/", file=sys.stderr)
             announce_compile(first.plant, first.options.rate)
+            prepare(first)  # compile once here: the jobs alone are short enough to pass a cold engine over
             bar = _progress_bar(len(jobs), done, kind)
             t0 = time.perf_counter()
             try:

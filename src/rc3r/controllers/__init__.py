@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
+from .._numba_cache import ready_or_python
 from . import _kernels as _K
 
 __all__ = [
@@ -140,7 +141,7 @@ class Law:
         """
         n = len(q)
         v, a, r, w = (np.empty(n) for _ in range(4))
-        _K.law_signals(self.code, self.pack(n), np.asarray(q, float), np.asarray(qd, float),
+        ready_or_python(_K.law_signals)(self.code, self.pack(n), np.asarray(q, float), np.asarray(qd, float),
                        np.asarray(ref, float), v, a, r, w)
         return v, a, r, w
 
@@ -150,7 +151,7 @@ class Law:
         th_eff = np.empty(self.p)
         zdot = np.zeros(self.initial_state().size)
         zz = np.asarray(z if z is not None else self.initial_state(), dtype=float)
-        diag = _K.law_output(self.code, self.pack(Y.shape[0]), Y, np.asarray(r, float), zz, th_eff, zdot)
+        diag = ready_or_python(_K.law_output)(self.code, self.pack(Y.shape[0]), Y, np.asarray(r, float), zz, th_eff, zdot)
         return th_eff, zdot, float(diag)
 
     def torque(self, robot, q, qd, ref, z=None):

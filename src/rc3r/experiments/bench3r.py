@@ -60,6 +60,7 @@ import os
 import platform
 import shutil
 import subprocess
+from pathlib import Path
 import sys
 import tempfile
 import time
@@ -435,6 +436,43 @@ def bench_compile() -> dict:
     return out
 
 
+#: The speed issue's cold start: this ``rc3r`` command line, in a fresh interpreter, empty numba cache.
+COLD_START_COMMAND = ("run", "--robot", "ur5", "--controller", "fbl", "--rate", "1000", "--duration", "1")
+#: Its target [s], end to end (imports, arm, simulation, files, figure; the install not counted).
+COLD_START_TARGET_S = 5.0
+
+
+def bench_cold_start() -> dict:
+    """``rc3r run --robot ur5 --controller fbl --rate 1000 --duration 1`` (:data:`COLD_START_COMMAND`) as a
+    fresh process with an empty numba cache (``NUMBA_CACHE_DIR`` a new directory, ``RC3R_COLD_START``
+    unset: the default policy), then again on the same cache: process wall time [s], the engine
+    the run used (its metrics.json), exit code."""
+    cache = tempfile.mkdtemp(prefix="rc3r-cold-start-")
+    code = "import sys; from rc3r.cli import entry; sys.argv = ['rc3r'] + sys.argv[1:]; entry()"
+    out = {"command": "rc3r " + " ".join(COLD_START_COMMAND), "target_s": COLD_START_TARGET_S}
+    try:
+        for label in ("cold", "warm"):
+            dest = os.path.join(cache, f"out-{label}")
+            _progress(f"cold start: {label} `{out['command']}` in a fresh interpreter ...")
+            env = _clean_env(NUMBA_CACHE_DIR=os.path.join(cache, "numba"))
+            env.pop("RC3R_COLD_START", None)
+            t0 = time.perf_counter()
+            p = subprocess.run([sys.executable, "-c", code, *COLD_START_COMMAND, "--out", dest],
+                               capture_output=True, text=True, env=env, timeout=900)
+            row = {"wall_s": time.perf_counter() - t0, "returncode": p.returncode}
+            try:
+                row["engine"] = json.loads(Path(dest, "metrics.json").read_text())["engine"]
+            except (OSError, ValueError, KeyError):
+                row["engine"] = None
+                row["error"] = (p.stderr.strip().splitlines() or ["no metrics.json"])[-1]
+            out[label] = row
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    cold = out.get("cold", {})
+    out["met"] = bool(cold.get("returncode") == 0 and cold.get("wall_s", 1e9) <= COLD_START_TARGET_S)
+    return out
+
+
 _MEMORY_WRAPPER = r"""
 import json, resource, subprocess, sys, time
 t0 = time.perf_counter()
@@ -529,6 +567,7 @@ def run_bench(quick: bool = False, progress=None) -> dict:
     skip = {"skipped": "quick mode"}
     out["compile"] = skip if quick else bench_compile()
     out["memory"] = skip if quick else bench_memory()
+    out["cold_start"] = skip if quick else bench_cold_start()
     out["checks_ok"] = all(c["ok"] for c in checks.values())
     out["total_wall_s"] = time.perf_counter() - t_start
     return out

@@ -132,6 +132,13 @@ def _urdf_text(path: Path) -> tuple[str, tuple[str, ...], tuple[tuple[str, str],
     return ET.tostring(root, encoding="unicode"), tuple(continuous), tuple(mimic)
 
 
+#: Below this many states, :meth:`PinocchioRobot.regressor` takes Pinocchio's path while the compiled
+#: kernel is not built (:meth:`~rc3r.robots.pinocchio_kernel.ChainKernel.ready`): two
+#: ``computeJointTorqueRegressor`` calls cost ~10 us per state, numba's first compilation of the
+#: kernel ~20 s of CPU (measured 2026-12-02 on a fresh clone, UR5).
+COLD_PINOCCHIO_STATES = 200_000
+
+
 class PinocchioRobot(Robot):
     """A serial arm of 1-DoF joints with one parameter set, computed by Pinocchio.
 
@@ -379,9 +386,9 @@ class PinocchioRobot(Robot):
 
         Identity: ``regressor(q, qd, v, a) @ theta == M(q) a + C(q, qd) v + g(q)``.
         """
-        if self.kernel is None:
-            return self.regressor_pinocchio(q, qd, v, a)
         single, X = self._states(q, qd, v, a)
+        if self.kernel is None or (X.shape[1] < COLD_PINOCCHIO_STATES and not self.kernel.ready()):
+            return self.regressor_pinocchio(q, qd, v, a)
         out = self.kernel(X, self._columns)
         return out[0] if single else out
 

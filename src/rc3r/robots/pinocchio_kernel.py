@@ -527,6 +527,14 @@ class ChainKernel:
                           self.aligned_parameters(pi), self.geo[self.n, :6].copy(), out)
         return out
 
+    @staticmethod
+    def ready() -> bool:
+        """True if the compiled regressor runs without compiling first (built in this process or in
+        numba's disk cache), or if ``RC3R_COLD_START=compile`` (:func:`rc3r._numba_cache.ready_or_python`)."""
+        from .._numba_cache import ready_or_python
+
+        return ready_or_python(_regressor) is _regressor
+
     def __call__(self, X, columns) -> np.ndarray:
         """``Y_pi[:, :, columns]`` (N, n, len(columns)) for states ``X`` (4, N, n) = (q, qd, v, a).
 

@@ -275,7 +275,31 @@ def _engine(plant, law, opt: SimOptions) -> str:
     """The registered engine's canonical name for ``opt.engine`` (:func:`rc3r.simulate.engines.choose`)."""
     from .engines import choose
 
-    return choose(opt.engine, plant, law)
+    return choose(opt.engine, plant, law, opt)
+
+
+def planned_engine(plant, law, options: SimOptions) -> tuple[str, str | None]:
+    """The engine :func:`simulate` will run ``law`` on ``plant`` with, and why ``"auto"`` passed over an
+    available compiled engine (its integrator not built yet and the run short:
+    :meth:`rc3r.simulate.engines.Engine.cold`), else None.
+
+    Example: ``planned_engine(spec.plant, spec.law, spec.options)`` -> ``("fast", None)`` once the
+    arm's compiled integrator is in numba's cache.
+    """
+    from ..plants import as_plant
+    from .engines import ENGINES
+
+    plant = as_plant(plant)
+    if options.rate is not None and options.nsub is None:
+        options = replace(options, nsub=default_substeps(plant, options.rate))
+    name = _engine(plant, law, options)
+    why = None
+    if options.engine == "auto":
+        passed = [e for e in {id(e): e for e in ENGINES.values()}.values()
+                  if e.auto_priority is not None and e.name != name and e.unavailable(plant, law) is None
+                  and e.cold(plant, law, options) is not None]
+        why = passed[0].cold(plant, law, options) if passed else None
+    return name, why
 
 
 def _check_structure(plant, model, law, trajectory, loop, opt) -> None:

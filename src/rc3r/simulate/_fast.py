@@ -187,19 +187,22 @@ class CompiledSimulator:
         return np.ascontiguousarray(kc, dtype=np.float64)
 
     def is_cached(self, which: str | None = None) -> bool:
-        """True if numba's disk cache holds the integrators of this supply a run needs (no compilation on
-        first use): ``which`` ``"sampled"``, ``"continuous"``, or None for both.
+        """True if the integrators of this supply a run needs are compiled in this process or held
+        valid by numba's disk cache (no compilation on first use, :func:`rc3r._numba_cache.ready`):
+        ``which`` ``"sampled"``, ``"continuous"``, or None for both.
 
-        Reads numba's cache index paths (an internal of numba 0.5x-0.6x); if they cannot be
-        read, answers True (no announcement rather than a wrong one).
+        Reads numba's cache index (an internal of numba 0.59-0.68); if it cannot be read, answers
+        True (no announcement and no cold-start fallback rather than a wrong one).
         """
+        from .._numba_cache import ready
+
         try:
             mod = self.instance
             funcs = {"sampled": (mod.integrate_sampled,), "continuous": (mod.integrate_continuous,)}.get(
                 which, (mod.integrate_continuous, mod.integrate_sampled))
-            return all(os.path.exists(f._cache._cache_file._index_path) for f in funcs)
         except (AttributeError, ParameterError):
             return True
+        return all(ready(f) for f in funcs)
 
     def continuous(self, rigid, fx, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
                    max_steps):

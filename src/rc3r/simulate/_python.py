@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._numba_cache import ready_or_python
 from ..trajectory import reference_into
 from . import _limits, _result, _sample_grid
 from . import status as S
@@ -46,13 +47,14 @@ class _Loop:
         self.n = plant.n
         self.tp = trajectory.pack()
         self.ref = np.empty((3, self.n))
+        self._reference = ready_or_python(reference_into)  # interpreted while numba's cache is cold
         self.nrhs = 0
         self.budget = budget
 
     def control(self, t, x, q=None, qd=None):
         """``(u, zdot, ||Y^T r||)`` at time t, state x = (q, qd, z), measured (q, qd) (default: x's)."""
         n = self.n
-        reference_into(self.tp, t, self.ref)
+        self._reference(self.tp, t, self.ref)
         q = x[0:n] if q is None else q
         qd = x[n:2 * n] if qd is None else qd
         u, zdot, yn = self.law.torque(self.model, q, qd, self.ref, x[2 * n:])
@@ -95,8 +97,6 @@ def _bound_event(n, opt):
 def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     """Simulate ``law`` (on ``model``'s regressor) against the :class:`~rc3r.plants.Plant` ``plant``;
     ``loop``: the sampled loop's effects or None."""
-    from scipy.integrate import solve_ivp
-
     n = plant.n
     reference = opt.engine == "reference"
     rtol, atol = (min(opt.rtol, 1e-11), min(opt.atol, 1e-12)) if reference else (opt.rtol, opt.atol)
@@ -115,6 +115,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     delayed: list = []  # commands of the last delay + 1 samples
     delay = loop.delay if loop is not None else 0
     advance = getattr(plant.rigid, "advance", None)
+    check = ready_or_python(S.check)  # interpreted while numba's cache is cold
     for s in range(nsamples + 1):
         t = s * Ts
         S.raise_if_stopped()
@@ -127,7 +128,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
         if uprev is not None:
             tv += np.abs(u - uprev)
         uprev = u
-        st = S.check(x, ucmd, lim)
+        st = check(x, ucmd, lim)
         if s % dec == 0 or st != S.OK:
             rows_t.append(t); rows_x.append(x.copy()); rows_u.append(u); rows_r.append(ctl.ref[0].copy())
             rows_y.append(yn)
@@ -142,6 +143,8 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 xs = np.concatenate([q1, qd1])
                 ok = bool(np.all(np.isfinite(xs)))
             elif reference:
+                from scipy.integrate import solve_ivp  # here: importing SciPy's integrators costs ~1 s
+
                 sol = solve_ivp(lambda _t, y: ctl.plant_rhs(y, u), (t, t + Ts), x[:2 * n], method="DOP853",
                                 rtol=rtol, atol=atol)
                 ok, xs = sol.success, (sol.y[:, -1] if sol.success else None)

@@ -57,6 +57,11 @@ class Engine:
         """Why this engine cannot simulate ``law`` on ``plant``, or None if it can."""
         return None
 
+    def cold(self, plant, law, options) -> str | None:
+        """Why ``"auto"`` should pass this engine over for a run of ``options`` although it is available
+        (its first use would cost more than the run: compilation), or None. Named engines ignore it."""
+        return None
+
     def run(self, plant, law, trajectory, options, x0, loop=None, model=None):
         """Simulate; returns a :class:`~rc3r.simulate.SimResult`."""
         raise NotImplementedError
@@ -104,14 +109,15 @@ def engine_names() -> Sequence:
     return _Names()
 
 
-def choose(name: str, plant, law) -> str:
+def choose(name: str, plant, law, options=None) -> str:
     """The canonical name of the engine ``name`` (``"auto"``: the available one of lowest
-    :attr:`Engine.auto_priority`) for ``law`` on ``plant``; ParameterError if it cannot run them."""
+    :attr:`Engine.auto_priority` that is not :meth:`~Engine.cold` for ``options``) for ``law`` on
+    ``plant``; ParameterError if it cannot run them."""
     if name == "auto":
         ranked = sorted({id(e): e for e in ENGINES.values() if e.auto_priority is not None}.values(),
                         key=lambda e: e.auto_priority)
         for eng in ranked:
-            if eng.unavailable(plant, law) is None:
+            if eng.unavailable(plant, law) is None and (options is None or eng.cold(plant, law, options) is None):
                 return eng.name
         raise ParameterError("no engine can simulate this plant and law")
     eng = get_engine(name)
@@ -119,6 +125,13 @@ def choose(name: str, plant, law) -> str:
     if why is not None:
         raise ParameterError(f"engine '{name}' is not available: {why} (use engine 'python')")
     return eng.name
+
+
+#: Sampled runs of at most this many RK4 sub-steps (20 s at 1 kHz on one step per period) run on the
+#: python engine while the compiled integrator is cold (:meth:`CompiledEngine.cold`). Measured
+#: 2026-12-02 (``rc3r bench``, cold-start rows): the UR5's python engine costs about 0.1 ms per
+#: sub-step, so 20000 take ~2 s, against 87 s of CPU for the compilation.
+COLD_MAX_SUBSTEPS = 20000
 
 
 class CompiledEngine(Engine):
@@ -140,6 +153,23 @@ class CompiledEngine(Engine):
             return ("the plant has an effect the compiled engine does not apply: "
                     + ", ".join(e.name for e in plant.effects if not (e.compiled or e.monitor)))
         return None
+
+    def cold(self, plant, law, options):
+        """A sampled run of at most :data:`COLD_MAX_SUBSTEPS` RK4 sub-steps whose integrator is neither
+        compiled in this process nor in numba's disk cache: the python engine finishes it sooner than
+        numba compiles (a 6-joint arm: 1-2 minutes of CPU), unless ``RC3R_COLD_START=compile``
+        (:func:`rc3r._numba_cache.cold_start_policy`). Continuous runs always compile (their stiff
+        laws take the python engine's SciPy Radau longer than the compilation)."""
+        from ..._numba_cache import cold_start_policy
+
+        if options.rate is None or cold_start_policy() == "compile":
+            return None
+        steps = round(options.duration * options.rate) * options.substeps
+        is_cached = getattr(plant.rigid.fast_engine, "is_cached", None)
+        if steps > COLD_MAX_SUBSTEPS or is_cached is None or is_cached("sampled"):
+            return None
+        return (f"its compiled integrator is not built yet and {steps} RK4 sub-steps take the python engine "
+                "less time than compiling it")
 
     def run(self, plant, law, trajectory, options, x0, loop=None, model=None):
         from .._fast import run
