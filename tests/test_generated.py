@@ -3,9 +3,11 @@
 Tolerances: every kernel is a few thousand double-precision operations on quantities of
 order one (rad, rad/s, kg, m), so its rounding error is ~1e-13 of the largest term; the
 comparisons are relative to ``max(1, |reference|)`` (the 1 keeps a near-zero entry from asking
-for more than absolute 1e-10) at 1e-10, 1000x above what was measured (~1e-14..1e-13,
-``docs/generated.md``). ``aba`` solves with M, whose condition number (Panda: up to ~1e4 at random
-states) multiplies the rounding error; it gets 1e-9.
+for more than absolute 1e-10) at 1e-10, orders of magnitude above the ~5e-16 that
+``benchmarks/generated_kernels.py`` prints for rnea and slotine_li (``docs/generated.md``) yet far
+below any modelling error (a wrong sign, axis or parameter is O(1)). ``aba`` solves with M, whose
+condition number multiplies the rounding error of both sides (the generated code and ``pin.aba``
+factor it differently); it gets 1e-9.
 """
 from __future__ import annotations
 

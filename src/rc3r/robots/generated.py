@@ -49,8 +49,8 @@ Functions (all per state; batch entry points loop over N states of row-major ``(
     unrolled into the same generated C (no pivoting: M is positive definite). Chosen over a
     symbolic articulated-body recursion because it reuses the two recursions already checked
     (``mass``, ``rnea``) so the expression graphs share their kinematics after CSE, and for
-    ``n <= 7`` CRBA + Cholesky costs about as much as ABA (Featherstone, *Rigid Body Dynamics
-    Algorithms*, 2008, Table 6.x); a state where M is not positive definite gives NaN.
+    the few joints of an arm (n <= 7) the unrolled factorization is a few hundred flops, no more
+    than ABA's 6 x 6 articulated inertias cost; a state where M is not positive definite gives NaN.
 
 Cache: a library is kept under ``cache_dir/<key>/`` (default ``$RC3R_CACHE_DIR/kernels`` if that
 variable is set, else ``~/.cache/rc3r/kernels``), where ``key`` is a SHA-256 of the chain's
@@ -92,7 +92,7 @@ FUNCTIONS = {
     "aba": ("q", "qd", "tau"),
 }
 
-#: Compiler flags (``-O3`` measured no faster, ``docs/generated.md``).
+#: Compiler flags (``-O3`` gave no consistent gain: ``docs/generated.md``).
 DEFAULT_FLAGS = ("-O2", "-shared", "-fPIC")
 
 #: Bumped when the layout of a cache entry changes.
