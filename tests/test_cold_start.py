@@ -123,9 +123,9 @@ def test_prepare_builds_a_cold_integrator_and_leaves_a_warm_one(monkeypatch):
     monkeypatch.setattr(CompiledSimulator, "is_cached", lambda self, which=None: bool(calls))
     real = CompiledSimulator.sampled
 
-    def sampled(self, *args):
+    def sampled(self, *args, **kwargs):
         calls.append(os.environ.get("RC3R_COLD_START"))
-        return real(self, *args)
+        return real(self, *args, **kwargs)
 
     monkeypatch.setattr(CompiledSimulator, "sampled", sampled)
     assert rc3r.study.prepare(spec) is True

@@ -205,13 +205,16 @@ class CompiledSimulator:
         return all(ready(f) for f in funcs)
 
     def continuous(self, rigid, fx, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
-                   max_steps):
-        return self.instance.integrate_continuous(x0, t_out, self.constants(rigid), fx, code, cp, tp, rtol, atol, h0,
+                   max_steps, kc=None):
+        """``kc``: :meth:`constants` of ``rigid`` if already packed (a run packs them once for all its chunks)."""
+        kc = self.constants(rigid) if kc is None else kc
+        return self.instance.integrate_continuous(x0, t_out, kc, fx, code, cp, tp, rtol, atol, h0,
                                                   hmax, lim, X, U, R, yn, jac_reuse, max_steps)
 
     def sampled(self, rigid, fx, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv, noise, quant,
-                ubuf):
-        return self.instance.integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, self.constants(rigid), fx, code, cp,
+                ubuf, kc=None):
+        kc = self.constants(rigid) if kc is None else kc
+        return self.instance.integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, code, cp,
                                                tp, lim, X, U, R, yn, tv, noise, quant, ubuf)
 
 
@@ -224,6 +227,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     eng = rigid.fast_engine
     n = plant.n
     fx = plant.pack()
+    kc = eng.constants(rigid)  # once per run (packing the UR5's took 0.4 ms per chunk)
     cp, tp, code = law.pack(n), trajectory.pack(), int(law.code)
     lim = _limits(opt)
     size = x0.size
@@ -242,7 +246,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 st_k, m, nrhs, nsteps, nrej, t_k = eng.continuous(
                     rigid, fx, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, 1e-5, hmax,
                     lim, X[start:end + 1], U[start:end + 1], R[start:end + 1], yn[start:end + 1], opt.jac_reuse,
-                    budget)
+                    budget, kc=kc)
                 counts += (nrhs, nsteps, nrej)
                 stored, st, t_end = start + m, st_k, t_k
                 if st != S.OK or end == nout - 1:
@@ -268,7 +272,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
             k = min(per, nsamples - s0)
             st_k, m, nrhs, ndone, t_k = eng.sampled(
                 rigid, fx, code, cp, tp, X[row].copy(), s0, Ts, k, dec, opt.substeps, lim,
-                X[row:], U[row:], R[row:], yn[row:], tv, noise, quant, ubuf)
+                X[row:], U[row:], R[row:], yn[row:], tv, noise, quant, ubuf, kc=kc)
             nrhs_all += nrhs
             stored, st, t_end, done = row + m, st_k, t_k, s0 + ndone
             if st != S.OK or s0 + k >= nsamples:
