@@ -121,6 +121,8 @@ def render_text(r: dict) -> str:
         lines += ["", _render_throughput(r["throughput"])]
     if "throughput_ur5" in r:
         lines += ["", _render_throughput(r["throughput_ur5"])]
+    if "generated" in r:
+        lines += ["", _render_generated(r["generated"])]
     if "design" in r:
         from ..design.bench import render as render_design
 
@@ -129,6 +131,27 @@ def render_text(r: dict) -> str:
     lines.append(f"Correctness: {'all checks pass' if r['checks_ok'] else 'SOME CHECKS FAIL'}. "
                  f"Benchmark wall time {_si(r['total_wall_s'])}.")
     return "\n".join(lines)
+
+
+def _render_generated(g: dict) -> str:
+    """Generated tau (CasADi -> C) against pin.rnea, per state."""
+    if "skipped" in g:
+        return f"Generated kernels: skipped ({g['skipped']})."
+    build = ("from the disk cache" if g["compile_s"] == 0 else
+             f"generated {g['generate_s']:.2f} s + compiled {g['compile_s']:.2f} s")
+    rows = [["generated rnea (C, one batch call)", _si(g["generated_rnea_s"]),
+             f"{g['pin_rnea_loop_s'] / g['generated_rnea_s']:.3g}x"],
+            ["pin.rnea loop (Python)", _si(g["pin_rnea_loop_s"]), "1x"],
+            ["pin.rnea C++ (ESTIMATE: fixed state - empty model)", _si(g["cpp_rnea_estimate_s"]),
+             f"{g['pin_rnea_loop_s'] / g['cpp_rnea_estimate_s']:.3g}x" if g["cpp_rnea_estimate_s"] > 0 else "-"]]
+    t = g["target"]
+    return "\n".join([
+        f"Generated kernels (rc3r.robots.generated, {g['robot']}, {build}): per state over {g['states']} states, "
+        f"median of {g['repeats']}; check vs pin.rnea max rel err {g['check']['max_rel_err']:.1e} "
+        f"({'ok' if g['check']['ok'] else 'FAILED'}):",
+        _table(["kernel", "per state", "x pin.rnea loop"], rows, {1, 2}),
+        f"target generated_tau_vs_cpp_rnea: <= {t['limit']:g}x: {t['ratio']:.3g}x -> {'met' if t['met'] else 'NOT MET'} "
+        "(benchmarks/cpp_pinocchio.py --robot ur5 measures the C++ side in C++)"])
 
 
 def _render_integrators(g: dict) -> str:
@@ -212,6 +235,11 @@ def cmd_bench(args) -> int:
     r["throughput_ur5"] = bench_throughput(n_plants=2 if quick else 100, duration=0.5 if quick else 10.0,
                                            robot="ur5", progress=_progress,
                                            config={"payload": {"mass": [0.0, 3.0]}, "simulation": {"rate": 1000.0}})
+    from ..robots.generated_bench import bench_generated
+
+    r["generated"] = bench_generated("ur5", quick=quick, progress=_progress)
+    if "check" in r["generated"]:
+        r["checks_ok"] = r["checks_ok"] and r["generated"]["check"]["ok"]
     from ..design.bench import bench_design
 
     r["design"] = bench_design(quick=quick, progress=_progress)
