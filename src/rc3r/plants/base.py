@@ -83,6 +83,11 @@ class Effect:
         """The torque (n,) delivered for the command ``u`` (identity by default)."""
         return u
 
+    def damping(self) -> np.ndarray | None:
+        """The largest slope ``-d joint_torque / d qd`` (n,) [N m s/rad] the effect can have, or None: what
+        makes it stiff for an explicit integrator (:func:`rc3r.simulate.default_substeps`)."""
+        return None
+
     def describe(self) -> dict:
         """JSON-ready description (``metrics.json``, campaign rows)."""
         return {"effect": self.name}

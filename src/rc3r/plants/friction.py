@@ -70,6 +70,11 @@ class Friction(Effect):
         qd = np.asarray(qd, dtype=float)
         return -(self.viscous * qd + self.coulomb * np.tanh(qd / self.v_s) + self.offset)
 
+    def damping(self) -> np.ndarray:
+        """``F_v + F_c / v_s`` (n,) [N m s/rad]: the largest slope of the friction torque in ``qd``
+        (``tanh``'s at ``qd = 0``)."""
+        return self.viscous + self.coulomb / self.v_s
+
     def pack_into(self, fx: np.ndarray, n: int) -> None:
         """Fill the friction fields of :meth:`rc3r.plants.base.Plant.pack`."""
         fx[0:n], fx[n:2 * n], fx[2 * n:3 * n], fx[3 * n] = self.viscous, self.coulomb, self.offset, self.v_s
