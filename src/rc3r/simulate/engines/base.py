@@ -128,9 +128,10 @@ def choose(name: str, plant, law, options=None) -> str:
 
 
 #: Sampled runs of at most this many RK4 sub-steps (20 s at 1 kHz on one step per period) run on the
-#: python engine while the compiled integrator is cold (:meth:`CompiledEngine.cold`). Measured
-#: 2026-12-02 (``rc3r bench``, cold-start rows): the UR5's python engine costs about 0.1 ms per
-#: sub-step, so 20000 take ~2 s, against 87 s of CPU for the compilation.
+#: python engine while the compiled integrator is cold (:meth:`CompiledEngine.cold`). ``rc3r bench``'s
+#: cold-start row, 2026-12-02: a 1 s UR5 run (1000 sub-steps) took 3.93 s end to end, imports and
+#: figure included, so 20000 stay well below the 1-2 minutes of CPU numba takes to compile a 6-joint
+#: arm's integrator.
 COLD_MAX_SUBSTEPS = 20000
 
 
