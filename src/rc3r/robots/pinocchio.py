@@ -134,8 +134,8 @@ def _urdf_text(path: Path) -> tuple[str, tuple[str, ...], tuple[tuple[str, str],
 
 #: Below this many states, :meth:`PinocchioRobot.regressor` takes Pinocchio's path while the compiled
 #: kernel is not built (:meth:`~rc3r.robots.pinocchio_kernel.ChainKernel.ready`): two
-#: ``computeJointTorqueRegressor`` calls cost ~10 us per state, numba's first compilation of the
-#: kernel ~20 s of CPU (measured 2026-12-02 on a fresh clone, UR5).
+#: ``computeJointTorqueRegressor`` calls cost 19 us per state on the UR5 ("Y (2 Pinocchio calls)" in
+#: ``rc3r bench``, 2026-12-02), numba's first compilation of the kernel tens of seconds of CPU.
 COLD_PINOCCHIO_STATES = 200_000
 
 
