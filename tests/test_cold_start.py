@@ -1,6 +1,6 @@
 """The cold start (speed issue): a short sampled run whose compiled integrator is not built yet runs on
 the python engine and compiles nothing; longer runs, continuous runs and ``RC3R_COLD_START=compile``
-compile; campaigns build the integrator once first (:func:`rc3r.study.prepare`).
+compile; campaigns build the integrator once first (:func:`rc3r.campaign.runner.prepare`).
 
 The suite itself runs with ``RC3R_COLD_START=compile`` (tests/conftest.py); the tests here that need
 the default policy set it themselves, or start a fresh interpreter with an empty numba cache.
@@ -19,6 +19,7 @@ import pytest
 
 import rc3r
 from rc3r import _numba_cache
+from rc3r.campaign.runner import prepare
 from rc3r.simulate import planned_engine
 from rc3r.simulate._fast import CompiledSimulator
 from rc3r.simulate.engines.base import COLD_MAX_SUBSTEPS
@@ -118,7 +119,7 @@ def test_prepare_builds_a_cold_integrator_and_leaves_a_warm_one(monkeypatch):
 
     rc3r.simulate(spec.plant, spec.law, spec.trajectory, replace(spec.options, engine="fast"))  # now warm
     assert planned_engine(spec.plant, spec.law, spec.options) == ("fast", None)
-    assert rc3r.study.prepare(spec) is False  # warm: nothing to do
+    assert prepare(spec) is False  # warm: nothing to do
     calls = []
     monkeypatch.setattr(CompiledSimulator, "is_cached", lambda self, which=None: bool(calls))
     real = CompiledSimulator.sampled
@@ -128,7 +129,7 @@ def test_prepare_builds_a_cold_integrator_and_leaves_a_warm_one(monkeypatch):
         return real(self, *args, **kwargs)
 
     monkeypatch.setattr(CompiledSimulator, "sampled", sampled)
-    assert rc3r.study.prepare(spec) is True
+    assert prepare(spec) is True
     assert calls and calls[0] == "compile"  # ran the compiled integrator, under the compile policy
     assert os.environ["RC3R_COLD_START"] == "python"  # and put the policy back
 

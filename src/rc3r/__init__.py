@@ -30,6 +30,9 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
 ``rc3r.robots.pinocchio_bench``        ``rc3r bench``'s generic-robot section (UR5, Panda)
+``rc3r.robots.generated``              generated C kernels of any arm (CasADi SX -> C, cached on disk)
+``rc3r.robots.generated_sym``          their symbolic recursions and the C batch wrapper
+``rc3r.robots.generated_bench``        ``rc3r bench``'s generated-kernel section (UR5 tau vs pin.rnea)
 ``rc3r.controllers``                   control laws u = Y theta_eff + w and their registry
 ``rc3r.controllers._kernels``          compiled kernels of the built-in laws (generic over n, p)
 ``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
@@ -91,6 +94,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.experiments``                   above the library: studies of named robots, benchmarks
 ``rc3r.experiments.paper3r``           the paper's section 4 on its 3R: five scenarios, claims (``rc3r paper``)
 ``rc3r.experiments.bench3r``           ``rc3r bench``: closed form vs Pinocchio, simulation timings
+``rc3r.experiments.bench_startup``     ``rc3r bench``'s fresh-process rows: compile, cold start, memory
 ``rc3r.verify``                        checks of a robot against Pinocchio
 ``rc3r.plotting``                      figures (never switches the matplotlib backend)
 ``rc3r.animation``                     the arm tracking its trajectory in 3D (Pinocchio FK), as a GIF

@@ -121,7 +121,7 @@ def cold_start_policy() -> str:
     ``python``: a short run whose compiled kernels are not built yet runs on code that needs no
     compilation (Pinocchio and plain Python), so a fresh install's first run takes seconds instead
     of the one-off numba compilation (1-2 minutes of CPU for a 6-joint arm); ``compile``: build
-    them (what campaigns do before their jobs: :func:`rc3r.study.prepare`).
+    them (what campaigns do before their jobs: :func:`rc3r.campaign.runner.prepare`).
     """
     import os
 

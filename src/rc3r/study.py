@@ -505,37 +505,6 @@ def _urdf_robot_cached(urdf, lock: dict | None = None):
     return _robot_cached(key, lambda: load_urdf_robot(urdf, lock=lock))
 
 
-def prepare(spec: RunSpec) -> bool:
-    """Build the compiled integrator ``spec``'s run would use if it were warm (numba compiles it, or loads
-    it from its disk cache), by simulating two control periods on it; True if it did.
-
-    Campaigns call it once before their jobs (``rc3r montecarlo``, ``sweep``, ``design``): each job alone
-    is short enough for ``"auto"`` to pass a cold compiled engine over (:meth:`~rc3r.simulate.engines.Engine.cold`),
-    so without it a fresh install's campaign would run every job on the python engine.
-    """
-    import os
-    from dataclasses import replace as _replace
-
-    from .simulate import planned_engine
-
-    plant = spec.true_plant if spec.true_plant is not None else spec.plant
-    name, why = planned_engine(plant, spec.law, spec.options)
-    if why is None:  # warm already, or no compiled engine can run it
-        return False
-    opt = spec.options
-    short = _replace(opt, engine="fast", duration=min(opt.duration, 2.0 / opt.rate))
-    before = os.environ.get("RC3R_COLD_START")
-    os.environ["RC3R_COLD_START"] = "compile"  # the law's and trajectory's kernels too
-    try:
-        simulate(plant, spec.law, spec.trajectory, short, loop=spec.loop, model=spec.robot_model)
-    finally:
-        if before is None:
-            os.environ.pop("RC3R_COLD_START", None)
-        else:
-            os.environ["RC3R_COLD_START"] = before
-    return True
-
-
 def execute(spec: RunSpec) -> tuple[SimResult, dict]:
     """Simulate a resolved run; return the result and its metrics (with the model's provenance)."""
     res = simulate(spec.true_plant if spec.true_plant is not None else spec.plant, spec.law, spec.trajectory,

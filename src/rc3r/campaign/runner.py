@@ -51,7 +51,7 @@ from ..errors import ConfigError, WorkerLostError
 from ..io import atomic_path
 from .jobs import Job, run_job
 
-__all__ = ["RunTable", "run_many", "read_rows", "sorted_rows", "format_value", "DASK_GRACE_S", "PARENT_POLL_S"]
+__all__ = ["RunTable", "run_many", "prepare", "read_rows", "sorted_rows", "format_value", "DASK_GRACE_S", "PARENT_POLL_S"]
 
 #: Seconds a Dask cluster may have no worker while runs wait before the campaign stops.
 DASK_GRACE_S = 60.0
@@ -351,6 +351,36 @@ def _dask(jobs, scheduler: str, grace: float):
     finally:
         client.close()
         logging.getLogger("distributed.client").removeFilter(quiet)
+
+
+def prepare(spec) -> bool:
+    """Build the compiled integrator a :class:`rc3r.study.RunSpec`'s run would use if it were warm (numba compiles it, or loads
+    it from its disk cache), by simulating two control periods on it; True if it did.
+
+    Campaigns call it once before their jobs (``rc3r montecarlo``, ``sweep``, ``design``): each job alone
+    is short enough for ``"auto"`` to pass a cold compiled engine over (:meth:`~rc3r.simulate.engines.Engine.cold`),
+    so without it a fresh install's campaign would run every job on the python engine.
+    """
+    from dataclasses import replace as _replace
+
+    from ..simulate import planned_engine, simulate
+
+    plant = spec.true_plant if spec.true_plant is not None else spec.plant
+    name, why = planned_engine(plant, spec.law, spec.options)
+    if why is None:  # warm already, or no compiled engine can run it
+        return False
+    opt = spec.options
+    short = _replace(opt, engine="fast", duration=min(opt.duration, 2.0 / opt.rate))
+    before = os.environ.get("RC3R_COLD_START")
+    os.environ["RC3R_COLD_START"] = "compile"  # the law's and trajectory's kernels too
+    try:
+        simulate(plant, spec.law, spec.trajectory, short, loop=spec.loop, model=spec.robot_model)
+    finally:
+        if before is None:
+            os.environ.pop("RC3R_COLD_START", None)
+        else:
+            os.environ["RC3R_COLD_START"] = before
+    return True
 
 
 def run_many(jobs, table: RunTable, timing: RunTable | None = None, *, workers: int | None = None,

@@ -89,7 +89,8 @@ def cmd_design(args) -> int:
     from ..campaign import RunTable, columns
     from ..design.report import design_figure, design_markdown, design_toml
     from ..design.verify import design_config, verify_design
-    from ..study import build_run, prepare
+    from ..campaign.runner import prepare
+    from ..study import build_run
     from .run import announce_compile, plant_options
 
     if args.scheduler is not None and args.workers is not None:

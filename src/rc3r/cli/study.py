@@ -28,7 +28,7 @@ from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..provenance import provenance
 from . import EXIT
 from ._output import check_output_path, locked
-from ..study import prepare
+from ..campaign.runner import prepare
 from .run import announce_compile
 
 

@@ -8,9 +8,12 @@ step. All are reported, never asserted (tests do not assert wall-clock times).
 """
 from __future__ import annotations
 
+import math
 import time
 
-__all__ = ["bench_generic", "GENERIC_TARGETS"]
+import numpy as np
+
+__all__ = ["bench_generic", "bench_regressor", "GENERIC_TARGETS"]
 
 #: name -> (limit, comparison, unit, description), as ``rc3r.experiments.bench3r.TARGETS``.
 GENERIC_TARGETS = {
@@ -27,7 +30,6 @@ def bench_generic(quick: bool = False, progress=None) -> dict:
     """Measure the generic-robot targets; returns ``{"regressor": {...}, "runs": {...}, "targets": {...}}``."""
     from ..study import build_run, execute
     from . import load_robot
-    from .pinocchio import bench_regressor
 
     say = progress or (lambda msg: None)
     out = {"regressor": {}, "runs": {}}
@@ -69,4 +71,54 @@ def bench_generic(quick: bool = False, progress=None) -> dict:
         x = measured[key]
         out["targets"][key] = {"limit": limit, "op": op, "unit": unit, "description": what, "measured": x,
                                "met": bool(x <= limit), "extrapolated": bool(quick and unit in ("s", "rnea"))}
+    return out
+
+
+def bench_regressor(robot, n: int = 2000, seed: int = 0, repeat: int = 3) -> dict:
+    """Per-state time of ``robot.regressor`` on a batch of ``n`` states vs one ``pinocchio.rnea`` call.
+
+    States from ``numpy.random.default_rng(seed)`` (q in [-pi, pi], qd, v, a in [-5, 5]).
+    Every timing is the best of ``repeat`` runs (``time.perf_counter``) in the same
+    process; ``rnea`` is called in a Python loop on ``robot.model``.
+
+    Returns
+    -------
+    dict
+        ``robot``, ``n`` (joints), ``p``, ``states``; per state [microseconds]:
+        ``regressor_us`` (one call on the whole batch), ``regressor_single_us`` (one
+        call per state), ``rnea_us``, and for a :class:`PinocchioRobot` the reference
+        path ``pinocchio_path_us`` (:meth:`PinocchioRobot.regressor_pinocchio`);
+        ``ratio`` = ``regressor_us / rnea_us``; ``max_rel_error_vs_rnea``: the benchmarked
+        regressor checked, ``max |Y(q, qd, qd, a) theta - rnea(q, qd, a)| / max |rnea|`` over the states.
+    """
+    import pinocchio as pin
+
+    rng = np.random.default_rng(seed)
+    Q = rng.uniform(-math.pi, math.pi, (n, robot.n))
+    QD, V, A = rng.uniform(-5.0, 5.0, (3, n, robot.n))
+    model = robot.model
+    data = model.createData()
+
+    def best(fn) -> float:
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t0)
+        return min(times) / n * 1e6
+
+    def loop(fn):
+        return lambda: [fn(*x) for x in zip(Q, QD, V, A)]
+
+    out = {"robot": getattr(robot, "robot_name", robot.name), "n": robot.n, "p": robot.p, "states": n,
+           "regressor_us": best(lambda: robot.regressor(Q, QD, V, A)),
+           "regressor_single_us": best(loop(robot.regressor)),
+           "rnea_us": best(loop(lambda q, qd, v, a: pin.rnea(model, data, q, qd, a)))}
+    if hasattr(robot, "regressor_pinocchio"):
+        out["pinocchio_path_us"] = best(lambda: robot.regressor_pinocchio(Q, QD, V, A))
+    out["ratio"] = out["regressor_us"] / out["rnea_us"]
+    # what was timed computes the right thing: Y(q, qd, qd, a) theta = rnea(q, qd, a) at every state
+    tau = np.einsum("knp,p->kn", robot.regressor(Q, QD, QD, A), robot.theta)
+    ref = np.array([pin.rnea(model, data, q, qd, a) for q, qd, a in zip(Q, QD, A)])
+    out["max_rel_error_vs_rnea"] = float(np.abs(tau - ref).max() / max(np.abs(ref).max(), 1e-300))
     return out

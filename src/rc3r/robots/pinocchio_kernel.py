@@ -46,6 +46,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .. import _numba_cache
+
 __all__ = ["ChainKernel", "make_work", "regressor_into", "forward_dynamics_into"]
 
 _JIT = dict(cache=True, nogil=True, fastmath=False)
@@ -516,7 +518,6 @@ class ChainKernel:
     def engine(self):
         """The compiled engine instantiated on this module (:class:`rc3r.simulate._fast.CompiledSimulator`)."""
         from ..simulate._fast import CompiledSimulator
-
         return CompiledSimulator(__name__)
 
     def forward_dynamics(self, X, pi) -> np.ndarray:
@@ -529,17 +530,11 @@ class ChainKernel:
 
     @staticmethod
     def ready() -> bool:
-        """True if the compiled regressor runs without compiling first (built in this process or in
-        numba's disk cache), or if ``RC3R_COLD_START=compile`` (:func:`rc3r._numba_cache.ready_or_python`)."""
-        from .._numba_cache import ready_or_python
-
-        return ready_or_python(_regressor) is _regressor
+        """True if the regressor runs without compiling (:func:`rc3r._numba_cache.ready_or_python`)."""
+        return _numba_cache.ready_or_python(_regressor) is _regressor
 
     def __call__(self, X, columns) -> np.ndarray:
-        """``Y_pi[:, :, columns]`` (N, n, len(columns)) for states ``X`` (4, N, n) = (q, qd, v, a).
-
-        ``Y_pi pi = M a + C(q, qd) v + g`` in the 10 n standard parameters ``pi``.
-        """
+        """``Y_pi[:, :, columns]`` (N, n, len(columns)) at ``X`` (4, N, n) = (q, qd, v, a): ``Y_pi pi = M a + C v + g``."""
         out = np.empty((X.shape[1], self.n, len(columns)))
         _regressor(np.ascontiguousarray(X, dtype=float), self.geo, self.ints, columns, out)
         return out

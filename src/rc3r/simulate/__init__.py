@@ -47,7 +47,7 @@ from ..errors import DivergenceError, ParameterError
 from . import status as S
 from .engines.base import engine_names as _engine_names
 
-__all__ = ["SimOptions", "SimResult", "simulate", "ENGINES"]
+__all__ = ["SimOptions", "SimResult", "simulate", "ENGINES", "planned_engine", "default_substeps", "stiffness"]
 
 #: Engines accepted by :class:`SimOptions`: ``"auto"`` and every name and alias of the engine registry
 #: (:mod:`rc3r.simulate.engines`; a live view: ``"auto", "fast", "compiled", "python", "reference"`` and
