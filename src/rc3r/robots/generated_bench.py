@@ -11,7 +11,7 @@ median of ``repeats`` passes after a warm-up:
 
 Target (the speed issue): generated tau for the UR5 at most the cost of one ``pin.rnea`` call
 measured from C++ (ratio <= 1). The check compares the generated torques with ``pin.rnea`` (1e-10
-relative to max(1, |tau|)). Skipped, with the reason, without CasADi or a C compiler.
+relative to ``max(1, |tau|)``). Skipped, with the reason, without CasADi or a C compiler.
 """
 from __future__ import annotations
 
