@@ -272,3 +272,31 @@ def test_design_benchmark_table_states_the_goal():
     text = render(r)
     assert GOAL_S == 120.0
     assert "240.0 s" in text and "600" in text and "2.5" in text and "wall / goal = 2 -> NOT MET" in text
+
+
+def _result(eps6, err6, rc_clean, err7, fbl=0.75):
+    from rc3r.design.verify import DesignResult
+
+    levels = [] if eps6 is None else [{"eps": eps6, "clean": True, "at_rate": {"worst_error": err6}, "at_low": {}}]
+    base = {"fbl": {"worst_error": fbl, "clean": True},
+            "robust-coeff": {"clean": rc_clean, "worst_error": err7, "eps_i": 1.0}}
+    return DesignResult(config={}, rate=500.0, margin=2.0, design=None, eps=eps6, levels=levels, baselines=base)
+
+
+@pytest.mark.parametrize("eps6, err6, rc_clean, err7, law", [
+    (388.0, 0.952, True, 0.154, "robust-coeff"),   # the Z1 at 500 Hz (docs/design.md's table)
+    (17.4, 0.0353, True, 0.0108, "robust-coeff"),  # the UR5 at 500 Hz
+    (17.4, 0.0100, True, 0.0300, "robust"),        # eq. 6 better
+    (None, None, True, 0.186, "robust-coeff"),     # the xArm7 at 500 Hz: eq. 6 not clean
+    (None, None, False, 0.674, None),              # the Kinova at 500 Hz: neither clean
+    (17.4, 0.0100, False, 0.0010, "robust"),       # eq. 7 smaller but not clean: not recommended
+])
+def test_recommendation_is_the_clean_robust_variant_with_the_smaller_worst_error(eps6, err6, rc_clean, err7, law):
+    rec = _result(eps6, err6, rc_clean, err7).recommendation()
+    if law is None:
+        assert rec is None
+        return
+    assert rec["law"] == law
+    assert rec["worst_error"] == (err7 if law == "robust-coeff" else err6)
+    assert rec["fbl_worst_error"] == 0.75
+    assert ("not clean" in rec["why"]) == (eps6 is None or not rc_clean)

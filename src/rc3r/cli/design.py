@@ -145,6 +145,9 @@ def cmd_design(args) -> int:
     print(f"{word}: eps = {g['eps']:.4g} (rule: {res.design.eps:.4g}, stability boundary {res.design.eps_stable:.4g}), "
           f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad (FBL {num(fbl)}); lowest clean "
           f"rate {num(low, '.4g')} Hz; {len(res.levels)} eps tried, wall {wall:.1f} s -> {out}/")
+    rec = res.recommendation()
+    if rec is not None:
+        print(f"recommended robust law: {rec['law']} ({rec['why']}; FBL {num(rec['fbl_worst_error'])} rad)")
     if not res.ok:
         print(f"rc3r design: no eps tried was clean on every plant at {args.rate:g} and {args.rate / args.margin:g} Hz; "
               f"{out}/design.toml has the rule's gains, unverified (see design.md)", file=sys.stderr)

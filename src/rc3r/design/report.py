@@ -105,6 +105,14 @@ def design_markdown(result, command: str = "") -> str:
         if s:
             lines.append(f"* {law} at {result.rate:g} Hz (gains above, verified once): {_verdicts(s)}, "
                          f"worst max|e| {_f(s.get('worst_error'))} rad.")
+    rec = result.recommendation()
+    if rec is not None:
+        f = rec["fbl_worst_error"]
+        lines.append(f"* **recommended robust law: {rec['law']}** ({'eq. 7' if rec['law'] == 'robust-coeff' else 'eq. 6'}):"
+                     f" {rec['why']}; FBL {_f(f)} rad. Run it: `rc3r montecarlo --config design.toml "
+                     f"--controllers {rec['law']},fbl`.")
+    else:
+        lines.append("* recommended robust law: none (neither eq. 6 nor eq. 7 was clean on every plant).")
     low = result.lowest_clean_rate()
     tried = ", ".join(f"{r['rate']:.4g} Hz {'clean' if r['clean'] else _verdicts(r)}" for r in result.low_rates)
     lines += [f"* lowest rate at which the design stayed clean: {_f(low, '.4g')} Hz"

@@ -153,6 +153,28 @@ class DesignResult:
                                                                                        self.design.eps_i)}
         return out
 
+    def recommendation(self) -> dict | None:
+        """The robust law to run: of eq. 6 (``robust``, the chosen eps, if clean at both rates) and eq. 7
+        (``robust-coeff``, verified once at the rate, if clean on every plant) the one with the smaller
+        worst max|e| at the rate; ``{"law", "worst_error", "fbl_worst_error", "why"}``, or None if neither
+        is clean. (eq. 6's boundary layer must be thick enough for the sampled loop; where that leaves
+        its robust term too weak, eq. 7's per-coefficient layers often are not: docs/design.md.)"""
+        cands = []
+        if self.chosen is not None:
+            cands.append(("robust", self.chosen["at_rate"].get("worst_error")))
+        rc = self.baselines.get("robust-coeff") or {}
+        if rc.get("clean") and rc.get("worst_error") is not None:
+            cands.append(("robust-coeff", rc["worst_error"]))
+        cands = [(law, e) for law, e in cands if e is not None and np.isfinite(e)]
+        if not cands:
+            return None
+        law, err = min(cands, key=lambda c: c[1])
+        other = [f"{ol} {oe:.3g} rad" for ol, oe in cands if ol != law]
+        why = (f"clean, worst max|e| {err:.3g} rad" + (f" (against {other[0]})" if other else
+               " (the other robust variant was not clean)"))
+        return {"law": law, "worst_error": float(err),
+                "fbl_worst_error": (self.baselines.get("fbl") or {}).get("worst_error"), "why": why}
+
     def lowest_clean_rate(self) -> float | None:
         """The lowest rate tested at which the design stayed clean (rate / margin at least, if verified)."""
         clean = [r["rate"] for r in self.low_rates if r["clean"]]
@@ -165,7 +187,8 @@ class DesignResult:
                 "design": self.design.describe(), "levels": self.levels, "baselines": self.baselines,
                 "low_rates": self.low_rates, "lowest_clean_rate": self.lowest_clean_rate(),
                 "plants": self.plants, "model": self.model, "spectrum": self.spectrum,
-                "effort_limit": self.effort_limit, "gains": self.gains(), "config": self.config}
+                "effort_limit": self.effort_limit, "gains": self.gains(), "config": self.config,
+                "recommendation": self.recommendation()}
 
 
 def _resolve(cfg: dict, rate: float):
