@@ -155,3 +155,21 @@ def test_fresh_process_with_an_empty_cache_compiles_nothing(tmp_path):
     res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
     e_fast = np.max(np.abs(res.e), axis=0)
     np.testing.assert_allclose(m["max_abs_error"], e_fast, rtol=1e-6, atol=1e-12)
+
+
+def test_run_says_when_stiff_friction_multiplies_the_sub_steps(capsys):
+    """The line rc3r run prints before a sampled run whose friction needs many sub-steps: the damping
+    rate and the sub-step count (64 for the UR5 with --friction 0.5:10 at 1 kHz: ceil(T lambda),
+    lambda from rc3r.simulate.stiffness); a rigid plant prints no such line."""
+    from rc3r.cli.run import announce_engine
+    from rc3r.simulate import default_substeps, stiffness
+
+    stiff = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=0.1, friction=(0.5, 10.0))
+    announce_engine(stiff)
+    err = capsys.readouterr().err
+    n = default_substeps(stiff.true_plant, 1000.0)
+    assert n > 16 and f"{n} RK4 sub-steps per 1 ms period" in err
+    assert f"{stiffness(stiff.true_plant):.3g} 1/s" in err
+    rigid = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=0.1)
+    announce_engine(rigid)
+    assert "stiff friction" not in capsys.readouterr().err

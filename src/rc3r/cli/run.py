@@ -33,14 +33,24 @@ def announce_compile(plant, rate=False) -> None:
         _progress(f"rc3r: compiling the simulator's kernels (numba): {what}, once; cached on disk afterwards")
 
 
+#: A sampled run on more default sub-steps per period than this says why (:func:`announce_engine`).
+STIFF_NOTE_SUBSTEPS = 16
+
+
 def announce_engine(spec) -> None:
     """:func:`announce_compile` if the run will compile its simulator; if ``auto`` takes the python engine
     because the compiled one is not built yet (a short sampled run, :func:`rc3r.simulate.planned_engine`),
     say that and how to build it."""
-    from ..simulate import planned_engine
+    from ..simulate import default_substeps, planned_engine, stiffness
 
-    name, why = planned_engine(spec.true_plant if spec.true_plant is not None else spec.plant, spec.law,
-                               spec.options)
+    plant = spec.true_plant if spec.true_plant is not None else spec.plant
+    opt = spec.options
+    if opt.rate is not None and opt.nsub is None:
+        nsub = default_substeps(plant, opt.rate)
+        if nsub > STIFF_NOTE_SUBSTEPS:
+            _progress(f"rc3r: stiff friction (it damps a joint at up to {stiffness(plant):.3g} 1/s): {nsub} RK4 "
+                      f"sub-steps per {1e3 / opt.rate:g} ms period, the run costs about {nsub} times a rigid plant's")
+    name, why = planned_engine(plant, spec.law, opt)
     if why is not None:
         from ..simulate.engines.base import COLD_MAX_SUBSTEPS
 
