@@ -49,7 +49,7 @@ import abc
 
 import numpy as np
 
-__all__ = ["Robot", "kinematics_differ"]
+__all__ = ["Robot", "kinematics_differ", "stack_states"]
 
 
 class Robot(abc.ABC):
@@ -190,3 +190,19 @@ def kinematics_differ(a: Robot, b: Robot, seed: int = 0, rtol: float = 1e-9) -> 
                     f"(relative {float(np.abs(ya - yb).max()) / scale:.2g}) at a random state: another kinematic "
                     "structure or gravity")
     return None
+
+
+def stack_states(n: int, *xs) -> tuple[bool, np.ndarray]:
+    """``(single, X)``: the (n,) or (N, n) arrays ``xs`` (broadcast if their shapes differ) stacked into
+    one C-contiguous float64 ``X`` of shape (len(xs), N, n) (N = 1 for (n,) inputs); ``single`` is
+    True for (n,) inputs. ValueError for any other shape."""
+    xs = [np.asarray(x, dtype=float) for x in xs]
+    if any(x.shape != xs[0].shape for x in xs):
+        xs = np.broadcast_arrays(*xs)
+    shape = xs[0].shape
+    if shape[-1:] != (n,) or len(shape) > 2:
+        raise ValueError(f"states must have shape ({n},) or (N, {n}), got {shape}")
+    X = np.empty((len(xs),) + (shape if len(shape) == 2 else (1, n)))
+    for k, x in enumerate(xs):
+        X[k] = x
+    return len(shape) == 1, X

@@ -79,6 +79,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, ParameterError
+from .base import stack_states
 from .generated_sym import _functions, _wrapper
 
 __all__ = ["GeneratedKernels", "FUNCTIONS", "DEFAULT_FLAGS", "default_cache_dir", "chain_constants"]
@@ -400,15 +401,8 @@ class GeneratedKernels:
     def _call(self, name: str, *xs) -> np.ndarray:
         if name not in self._fns:
             raise ConfigError(f"{name} was not generated for this library (functions: {', '.join(self.functions)})")
-        xs = [np.asarray(x, dtype=float) for x in xs]
-        if any(x.shape != xs[0].shape for x in xs):
-            xs = np.broadcast_arrays(*xs)
-        shape, n = xs[0].shape, self.n
-        if shape[-1:] != (n,) or len(shape) > 2:
-            raise ValueError(f"states must have shape ({n},) or (N, {n}), got {shape}")
-        single = len(shape) == 1
-        xs = [np.ascontiguousarray(x.reshape(-1, n), dtype=np.float64) for x in xs]
-        N = xs[0].shape[0]
+        single, X = stack_states(self.n, *xs)  # X[k] (N, n): C-contiguous float64
+        xs, N = list(X), X.shape[1]
         out_shape = tuple(self.meta["shapes"][name])
         out = np.empty((N,) + out_shape)
         self._fns[name](N, *(x.ctypes.data for x in xs), out.ctypes.data)

@@ -54,7 +54,7 @@ import numpy as np
 
 from ..errors import ConfigError, ParameterError, UrdfError
 from ..io import MAGNITUDE_NOTE, native_stderr, number_problem, require_file
-from .base import Robot
+from .base import Robot, stack_states
 from .base_parameters import (BaseParameters, base_parameters, check_model, physical_issues,
                               standard_parameter_names)
 
@@ -368,17 +368,8 @@ class PinocchioRobot(Robot):
         return self._pin_datas
 
     def _states(self, *xs) -> tuple[bool, np.ndarray]:
-        """(single, X) with X (len(xs), N, n) from (n,) or (N, n) arrays (broadcast if shapes differ)."""
-        xs = [np.asarray(x, dtype=float) for x in xs]
-        if any(x.shape != xs[0].shape for x in xs):
-            xs = np.broadcast_arrays(*xs)
-        shape, n = xs[0].shape, self.n
-        if shape[-1:] != (n,) or len(shape) > 2:
-            raise ValueError(f"states must have shape ({n},) or (N, {n}), got {shape}")
-        X = np.empty((len(xs),) + (shape if len(shape) == 2 else (1, n)))
-        for k, x in enumerate(xs):
-            X[k] = x
-        return len(shape) == 1, X
+        """(single, X) with X (len(xs), N, n) from (n,) or (N, n) arrays (:func:`~rc3r.robots.base.stack_states`)."""
+        return stack_states(self.n, *xs)
 
     def regressor(self, q, qd, v, a) -> np.ndarray:
         """Slotine--Li regressor in the base parameters, (n, p) or (N, n, p) (module docstring).
