@@ -27,26 +27,13 @@ import argparse
 import datetime
 import os
 import platform
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-
-
-def median_per_state(fn, count: int, repeats: int) -> float:
-    """Median over ``repeats`` runs of ``fn()`` [s], divided by ``count``; one warm-up run first."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times) / count
 
 
 def robot_of(name: str):
@@ -76,6 +63,7 @@ def main(argv=None) -> int:
     import pinocchio as pin
 
     from rc3r.robots.generated import DEFAULT_FLAGS, GeneratedKernels
+    from rc3r.robots.pinocchio_bench import median_per_state, pin_rnea_cpp_estimate
 
     robot = robot_of(args.robot)
     n, N, R = robot.n, args.n, args.repeats
@@ -110,14 +98,7 @@ def main(argv=None) -> int:
         t["robot.regressor (numba)"] = median_per_state(lambda: robot.regressor(Q, QD, V, A), N, R)
 
         # Pinocchio's C++ rnea: fixed state minus the empty model, both looped from Python
-        reps = max(N, 20000)
-        m0 = pin.Model()
-        d0 = m0.createData()
-        z = np.zeros(0)
-        q0, qd0, a0 = Q[0].copy(), QD[0].copy(), A[0].copy()
-        t_fixed = median_per_state(lambda: [pin.rnea(model, data, q0, qd0, a0) for _ in range(reps)], reps, R)
-        t_empty = median_per_state(lambda: [pin.rnea(m0, d0, z, z, z) for _ in range(reps)], reps, R)
-        t_cpp = max(t_fixed - t_empty, 0.0)
+        t_fixed, t_empty, t_cpp = pin_rnea_cpp_estimate(model, Q[0], QD[0], A[0], max(N, 20000), R)
 
         print(f"# generated kernels benchmark, {datetime.date.today().isoformat()}, robot {args.robot} "
               f"(n={n}, p={robot.p}), {N} states, median of {R}; python {platform.python_version()}, "

@@ -289,23 +289,9 @@ def bench_ops(n: int, repeats: int) -> tuple[dict, dict, dict]:
 
     # ---- Pinocchio's C++ cost: an estimate (see the module docstring) ----
     _progress("estimating Pinocchio's C++ cost (binding overhead subtracted) ...")
-    m0 = pin.Model()
-    d0 = m0.createData()
-    z = np.zeros(0)
-    q0, qd0, qdd0 = Q[0].copy(), QD[0].copy(), QDD[0].copy()
-    reps = max(n, 20000)
+    from ..robots.pinocchio_bench import pin_rnea_cpp_estimate
 
-    def same():
-        for _ in range(reps):
-            rnea(m, d, q0, qd0, qdd0)
-
-    def empty():
-        for _ in range(reps):
-            rnea(m0, d0, z, z, z)
-
-    t_same = _time(same, repeats)[0] / reps
-    t_empty = _time(empty, repeats)[0] / reps
-    t_cpp = max(t_same - t_empty, 0.0)
+    t_same, t_empty, t_cpp = pin_rnea_cpp_estimate(m, Q[0], QD[0], QDD[0], max(n, 20000), repeats)
     best_tau = min(ops["inverse_dynamics compiled"]["median_s"], ops["inverse_dynamics batch"]["median_s"])
     cpp = {
         "estimate": True,

@@ -15,25 +15,12 @@ relative to ``max(1, |tau|)``). Skipped, with the reason, without CasADi or a C 
 """
 from __future__ import annotations
 
-import statistics
-import time
-
 import numpy as np
 
 __all__ = ["bench_generated", "TARGET_RATIO"]
 
 #: Generated tau per state / Pinocchio's C++ rnea per call, at most.
 TARGET_RATIO = 1.0
-
-
-def _median(fn, count: int, repeats: int) -> float:
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times) / count
 
 
 def bench_generated(robot: str = "ur5", quick: bool = False, seed: int = 0, progress=None) -> dict:
@@ -50,6 +37,7 @@ def bench_generated(robot: str = "ur5", quick: bool = False, seed: int = 0, prog
 
     from .generated import GeneratedKernels
     from .pinocchio import PinocchioRobot
+    from .pinocchio_bench import median_per_state, pin_rnea_cpp_estimate
 
     arm = PinocchioRobot.named(robot)
     report(f"generated kernels: {robot} (CasADi -> C; built once, cached on disk) ...")
@@ -65,15 +53,9 @@ def bench_generated(robot: str = "ur5", quick: bool = False, seed: int = 0, prog
     m = min(N, 1000)
     ref = np.array([pin.rnea(model, data, q, qd, a) for q, qd, a in zip(Q[:m], QD[:m], A[:m])])
     err = float(np.max(np.abs(k.rnea(Q[:m], QD[:m], A[:m]) - ref) / np.maximum(1.0, np.abs(ref))))
-    t_gen = _median(lambda: k.rnea(Q, QD, A), N, R)
-    t_loop = _median(lambda: [pin.rnea(model, data, q, qd, a) for q, qd, a in zip(Q, QD, A)], N, R)
-    reps = max(N, 20_000)
-    m0 = pin.Model()
-    d0, z = m0.createData(), np.zeros(0)
-    q0, qd0, a0 = Q[0].copy(), QD[0].copy(), A[0].copy()
-    t_fixed = _median(lambda: [pin.rnea(model, data, q0, qd0, a0) for _ in range(reps)], reps, R)
-    t_empty = _median(lambda: [pin.rnea(m0, d0, z, z, z) for _ in range(reps)], reps, R)
-    t_cpp = max(t_fixed - t_empty, 0.0)
+    t_gen = median_per_state(lambda: k.rnea(Q, QD, A), N, R)
+    t_loop = median_per_state(lambda: [pin.rnea(model, data, q, qd, a) for q, qd, a in zip(Q, QD, A)], N, R)
+    t_fixed, t_empty, t_cpp = pin_rnea_cpp_estimate(model, Q[0], QD[0], A[0], max(N, 20_000), R)
     ratio = t_gen / t_cpp if t_cpp > 0 else float("inf")
     return {"robot": robot, "n": arm.n, "states": N, "repeats": R, "seed": seed,
             "generate_s": k.generate_seconds, "compile_s": k.compile_seconds,

@@ -9,11 +9,12 @@ step. All are reported, never asserted (tests do not assert wall-clock times).
 from __future__ import annotations
 
 import math
+import statistics
 import time
 
 import numpy as np
 
-__all__ = ["bench_generic", "bench_regressor", "GENERIC_TARGETS"]
+__all__ = ["bench_generic", "bench_regressor", "median_per_state", "pin_rnea_cpp_estimate", "GENERIC_TARGETS"]
 
 #: name -> (limit, comparison, unit, description), as ``rc3r.experiments.bench3r.TARGETS``.
 GENERIC_TARGETS = {
@@ -122,3 +123,30 @@ def bench_regressor(robot, n: int = 2000, seed: int = 0, repeat: int = 3) -> dic
     ref = np.array([pin.rnea(model, data, q, qd, a) for q, qd, a in zip(Q, QD, A)])
     out["max_rel_error_vs_rnea"] = float(np.abs(tau - ref).max() / max(np.abs(ref).max(), 1e-300))
     return out
+
+
+def median_per_state(fn, count: int, repeats: int) -> float:
+    """Median over ``repeats`` runs of ``fn()`` [s], divided by ``count``; one warm-up run first."""
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times) / count
+
+
+def pin_rnea_cpp_estimate(model, q, qd, qdd, reps: int, repeats: int) -> tuple[float, float, float]:
+    """Pinocchio's C++ ``rnea`` per call [s], estimated from Python: ``(t_fixed, t_empty, t_cpp)`` with
+    ``t_fixed`` = ``pin.rnea(model, ...)`` looped ``reps`` times on the one state ``(q, qd, qdd)``,
+    ``t_empty`` = the same binding call on an empty model (nq = 0: no dynamics), both medians of
+    ``repeats`` (:func:`median_per_state`), and ``t_cpp = max(t_fixed - t_empty, 0)``: an upper bound
+    of the C++ work (``benchmarks/cpp_pinocchio.py`` measures it in C++)."""
+    import pinocchio as pin
+
+    data, m0 = model.createData(), pin.Model()
+    d0, z = m0.createData(), np.zeros(0)
+    q0, qd0, a0 = (np.array(x, dtype=float) for x in (q, qd, qdd))
+    t_fixed = median_per_state(lambda: [pin.rnea(model, data, q0, qd0, a0) for _ in range(reps)], reps, repeats)
+    t_empty = median_per_state(lambda: [pin.rnea(m0, d0, z, z, z) for _ in range(reps)], reps, repeats)
+    return t_fixed, t_empty, max(t_fixed - t_empty, 0.0)
