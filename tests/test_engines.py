@@ -65,7 +65,7 @@ def test_chain_supply_entry_points_equal_the_robot(ur5, rng):
     """The supply's regressor_into (base-parameter columns) equals Pinocchio's two-regressor reference path
     (1e-12 relative), and forward_dynamics_into on a payload plant's constants equals that plant's
     pinocchio.aba (1e-10): the engine sees the plant through these two functions only."""
-    from rc3r.robots import pinocchio_kernel as PK
+    from rc3r.robots import pinocchio_supply as PK
     from rc3r.uncertainty.payload import with_payload
 
     plant = with_payload(ur5, 3.0, (0.0, 0.0, 0.1))
@@ -194,7 +194,7 @@ def test_bad_kernel_supply_is_refused():
 
     with pytest.raises(ParameterError, match="dotted module name"):
         instantiate("not a module; import os")
-    with pytest.raises(ParameterError, match="lacks make_work, regressor_into, forward_dynamics_into"):
+    with pytest.raises(ParameterError, match="lacks make_work, regressor_into, forward_dynamics_into, passes_into, xi_into, apply_into"):
         instantiate("rc3r.errors")
 
 

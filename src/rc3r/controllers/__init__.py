@@ -151,7 +151,9 @@ class Law:
         th_eff = np.empty(self.p)
         zdot = np.zeros(self.initial_state().size)
         zz = np.asarray(z if z is not None else self.initial_state(), dtype=float)
-        diag = ready_or_python(_K.law_output)(self.code, self.pack(Y.shape[0]), Y, np.asarray(r, float), zz, th_eff, zdot)
+        if _K.uses_xi.py_func(self.code):
+            ready_or_python(_K.regressor_transpose)(Y, np.asarray(r, float), th_eff)  # xi, in th_eff
+        diag = ready_or_python(_K.law_theta)(self.code, self.pack(Y.shape[0]), Y.shape[0], zz, th_eff, zdot)
         return th_eff, zdot, float(diag)
 
     def torque(self, robot, q, qd, ref, z=None):

@@ -7,9 +7,15 @@ computed in two stages around the robot's regressor:
    :math:`q_d, \dot q_d, \ddot q_d`), the regressor arguments ``v``, ``a``, the
    sliding variable ``r`` and the additive term ``w``;
 2. the caller evaluates ``Y = Y(q, qd, v, a)`` with its robot's kernel;
-3. :func:`law_output` -- :math:`\theta_{\mathrm{eff}}` (into ``th_eff``), the
+3. :func:`regressor_transpose` -- ``xi = Y^T r`` (the laws for which :func:`uses_xi`);
+4. :func:`law_theta` -- :math:`\theta_{\mathrm{eff}}` from ``xi`` (in place), the
    controller-state rate ``zdot``, and :math:`\|Y^T r\|` for diagnostics;
-   :func:`apply_regressor` then forms ``u = Y th_eff + w``.
+5. :func:`apply_regressor` -- ``u = Y th_eff + w``.
+
+Only ``xi = Y^T r`` and ``Y th_eff`` enter: a robot's kernel supply may compute both without
+forming ``Y`` (:mod:`rc3r.robots.pinocchio_supply`, O(n)) and call :func:`law_theta` between them.
+Each stage is a leaf (it calls no other jitted function), so its ``py_func`` runs without
+compiling anything (the cold start, :func:`rc3r._numba_cache.ready_or_python`).
 
 The law is picked by an integer ``code`` (a short static dispatch: numba does
 not cache a function that receives another jitted function as an argument).
@@ -67,12 +73,27 @@ def law_signals(code, cp, q, qd, ref, v, a, r, w):
 
 
 @njit(**_INLINE)
-def law_output(code, cp, Y, r, z, th_eff, zdot):
-    """Effective parameters ``th_eff`` (p,) and controller-state rate ``zdot``; returns ||Y^T r||.
+def uses_xi(code):
+    """True if the law ``code`` needs ``xi = Y^T r`` (every law but FBL and PD)."""
+    return code != FBL and code != PD
 
-    ``th_eff`` doubles as the work array for ``xi = Y^T r``.
-    """
-    n = Y.shape[0]
+
+@njit(**_INLINE)
+def regressor_transpose(Y, r, xi):
+    """xi (p,) = Y^T r."""
+    n, p = Y.shape
+    for j in range(p):
+        acc = 0.0
+        for i in range(n):
+            acc += Y[i, j] * r[i]
+        xi[j] = acc
+
+
+@njit(**_INLINE)
+def law_theta(code, cp, n, z, th_eff, zdot):
+    """From ``th_eff`` = xi = Y^T r (ignored by FBL and PD) of an n-joint arm: the effective parameters
+    into ``th_eff`` and ``zdot``; returns ||xi|| (0 for FBL and PD). A supply that contracts Y without forming it
+    (:mod:`rc3r.robots.pinocchio_supply`) calls this after its own ``xi_into``."""
     p = int(cp[0])
     if code == FBL or code == PD:
         for j in range(p):
@@ -80,11 +101,7 @@ def law_output(code, cp, Y, r, z, th_eff, zdot):
         return 0.0
     nrm2 = 0.0
     for j in range(p):
-        acc = 0.0
-        for i in range(n):
-            acc += Y[i, j] * r[i]
-        th_eff[j] = acc
-        nrm2 += acc * acc
+        nrm2 += th_eff[j] * th_eff[j]
     nrm = math.sqrt(nrm2)
     s = 1 + p + 2 * n  # first law-specific entry after theta, K, Lambda
     if code == ROBUST:

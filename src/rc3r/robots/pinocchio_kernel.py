@@ -38,8 +38,8 @@ body ``j``: ``Y[i, 10 j + c] = S_i . F_j[:, c]`` (``S_i`` carried into body j's 
 Forward dynamics (the compiled engine's plant, :func:`_forward_dynamics_one`): the same world
 frame, bias torques by Newton--Euler at ``qdd = 0``, M by the composite-rigid-body algorithm,
 Cholesky (``tests/test_engines.py``: equal to ``pinocchio.aba`` to 1e-10 relative, UR5, Panda).
-Kernel supply (:mod:`rc3r.simulate.engines._template`): :func:`make_work`, :func:`regressor_into`
-(base-parameter columns), :func:`forward_dynamics_into` on :meth:`ChainKernel.pack`'s ``kc``.
+The compiled engine's kernel supply of a chain, on :meth:`ChainKernel.pack`'s ``kc``, is
+:mod:`rc3r.robots.pinocchio_supply` (these kernels and the law's O(n) contractions of ``Y``).
 """
 from __future__ import annotations
 
@@ -48,9 +48,11 @@ from numba import njit
 
 from .. import _numba_cache
 
-__all__ = ["ChainKernel", "make_work", "regressor_into", "forward_dynamics_into"]
+__all__ = ["ChainKernel"]
 
 _JIT = dict(cache=True, nogil=True, fastmath=False)
+#: The dotted name of the chain's kernel supply (:attr:`ChainKernel.engine`).
+SUPPLY = "rc3r.robots.pinocchio_supply"
 _INLINE = dict(_JIT, inline="always")
 
 
@@ -383,7 +385,7 @@ def _forward_dynamics(X, geoz, ints, piz, grav, out):
             out[s, :] = np.nan
 
 
-# ---- the kernel supply of the compiled engine (rc3r.simulate.engines._template) -----------------
+# ---- scratch space (also of the engine's kernel supply, rc3r.robots.pinocchio_supply) ------------
 
 
 @njit(**_JIT)
@@ -399,40 +401,6 @@ def _fd_work(n):
     """Scratch arrays of the forward dynamics: R (n, 9), p, S, V, A, I (n, 10), f, M."""
     return (np.empty((n, 9)), np.empty((n, 3)), np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 6)),
             np.empty((n, 10)), np.empty((n, 6)), np.empty((n, n)))
-
-
-@njit(**_INLINE)
-def _unpack(kc):
-    """``(geo, ints, columns, geoz, piz)`` views of ``kc`` (:meth:`ChainKernel.pack`)."""
-    n, p = int(kc[0]), int(kc[1])
-    o1 = 2 + 15 * (n + 1)
-    o2 = o1 + n * (n + 2)
-    o3 = o2 + p
-    return (kc[2:o1].reshape((n + 1, 15)), kc[o1:o2].reshape((n, n + 2)), kc[o2:o3],
-            kc[o3:o3 + 12 * n].reshape((n, 12)), kc[o3 + 12 * n:o3 + 22 * n].reshape((n, 10)))
-
-
-@njit(**_JIT)
-def make_work(kc):
-    """``(constants, regressor scratch, dynamics scratch, column mask)``: the views of ``kc`` (made once,
-    not per call), the arrays of :func:`_work` and :func:`_fd_work` for ``n = kc[0]``, :func:`_needed`."""
-    n = int(kc[0])
-    consts = _unpack(kc)
-    return consts, _work(n), _fd_work(n), _needed(consts[2], n)
-
-
-@njit(**_INLINE)
-def regressor_into(kc, q, qd, v, a, Y, wk):
-    """Y (n, p): the Slotine--Li regressor in the base-parameter columns of ``kc``."""
-    geo, ints, columns, _geoz, _piz = wk[0]
-    _regressor_one(q, qd, v, a, geo, ints, columns, wk[3], Y, wk[1])
-
-
-@njit(**_INLINE)
-def forward_dynamics_into(kc, q, qd, tau, qdd, wk):
-    """qdd of the chain with the standard parameters of ``kc``; False if M is not PD."""
-    geo, ints, _columns, geoz, piz = wk[0]
-    return _forward_dynamics_one(q, qd, tau, geoz, ints, piz, geo[geo.shape[0] - 1], qdd, wk[2])
 
 
 def _align(u) -> np.ndarray:
@@ -510,15 +478,15 @@ class ChainKernel:
                                self.geoz.ravel(), self.aligned_parameters(pi).ravel()]).astype(np.float64)
 
     def supply(self, robot) -> tuple[str, np.ndarray]:
-        """``robot.compiled_kernels``: this module and :meth:`pack` of the robot's base columns and
-        standard parameters (the robot's ``fast_engine`` is :attr:`engine`)."""
-        return __name__, self.pack(robot.base.independent, robot.standard_parameters())
+        """``robot.compiled_kernels``: the supply module (:data:`SUPPLY`) and :meth:`pack` of the robot's base
+        columns and standard parameters (the robot's ``fast_engine`` is :attr:`engine`)."""
+        return SUPPLY, self.pack(robot.base.independent, robot.standard_parameters())
 
     @property
     def engine(self):
-        """The compiled engine instantiated on this module (:class:`rc3r.simulate._fast.CompiledSimulator`)."""
+        """The compiled engine instantiated on the chain's supply (:class:`rc3r.simulate._fast.CompiledSimulator`)."""
         from ..simulate._fast import CompiledSimulator
-        return CompiledSimulator(__name__)
+        return CompiledSimulator(SUPPLY)
 
     def forward_dynamics(self, X, pi) -> np.ndarray:
         """``qdd`` (N, n) at the states ``X`` (3, N, n) = (q, qd, tau) for standard parameters ``pi``

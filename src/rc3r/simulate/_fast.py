@@ -50,13 +50,13 @@ CHUNK_S = 0.5
 HMAX = 0.001
 
 #: The line of :mod:`.engines.compiled` that each instantiation replaces.
-MARKER = ("from rc3r.simulate.engines._template import forward_dynamics_into as _fd, make_work as _make_work, "
-          "regressor_into as _regressor  # kernel supply")
+MARKER = ("from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, "
+          "make_work as _make_work, passes_into as _passes, xi_into as _xi  # kernel supply")
 
 #: Age [s] past which an instantiation of another package version is removed.
 STALE_S = 86400.0
 
-_SUPPLY = ("make_work", "regressor_into", "forward_dynamics_into")
+_SUPPLY = ("make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into")
 _DOTTED = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*\Z")
 _INSTANCES: dict = {}
 

@@ -5,7 +5,7 @@ the same order of operations, with the arm's two kinematic constants (the DH len
 gravity ``g0``) as literals. It fulfils the regressor contract of :mod:`rc3r.export.c`: a type
 ``rc3r_regressor`` and the functions ``rc3r_regressor_eval`` (Y at one state), ``rc3r_regressor_xi``
 (``xi = Y^T r``) and ``rc3r_regressor_apply`` (``u = w + Y theta``), whose loops are those of
-:func:`rc3r.controllers._kernels.law_output` and ``apply_regressor``.
+:func:`rc3r.controllers._kernels.regressor_transpose` and ``apply_regressor``.
 """
 from __future__ import annotations
 

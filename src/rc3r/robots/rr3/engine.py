@@ -11,9 +11,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...controllers._kernels import apply_regressor, regressor_transpose
 from . import kernels as K
 
-__all__ = ["make_work", "regressor_into", "forward_dynamics_into", "pack", "ENGINE"]
+__all__ = ["make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into",
+           "pack", "ENGINE"]
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -39,6 +41,25 @@ def regressor_into(kc, q, qd, v, a, Y, wk):
 def forward_dynamics_into(kc, q, qd, tau, qdd, wk):
     """qdd of the closed form (theta = kc[:15]); False if M is not PD."""
     return K.forward_dynamics_into(kc, q, qd, tau, kc[15], kc[16], qdd, wk[0], wk[1])
+
+
+
+@njit(**dict(_JIT, inline="always"))
+def passes_into(kc, q, qd, v, a, Y, wk):
+    """Y (3, 15) itself (:func:`regressor_into`): the closed form is cheaper formed than contracted."""
+    regressor_into(kc, q, qd, v, a, Y, wk)
+
+
+@njit(**dict(_JIT, inline="always"))
+def xi_into(kc, Y, r, xi, wk):
+    """xi = Y^T r on the formed Y."""
+    regressor_transpose(Y, r, xi)
+
+
+@njit(**dict(_JIT, inline="always"))
+def apply_into(kc, Y, th, w, u, wk):
+    """u = w + Y th on the formed Y."""
+    apply_regressor(Y, th, w, u)
 
 
 #: This module's dotted name, what :attr:`RR3.compiled_kernels` hands to the engine.

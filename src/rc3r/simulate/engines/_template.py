@@ -1,15 +1,15 @@
 r"""The kernel supply of the compiled engine: what a robot hands to :mod:`.compiled`, as stubs.
 
-:mod:`rc3r.simulate.engines.compiled` is written once, against the three functions below. It is
+:mod:`rc3r.simulate.engines.compiled` is written once, against the six functions below. It is
 never compiled as it stands: :mod:`rc3r.simulate._fast` writes a copy of its source per kernel
 supply with this module's import line replaced by the supply's module (numba caches a module
 on disk like any file, but not a function that receives another jitted function). A robot
 names its supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`, ``(module, kc)``:
 
 ``module`` : str
-    Dotted name of an importable module defining, with ``numba.njit``, the three functions
+    Dotted name of an importable module defining, with ``numba.njit``, the six functions
     of this one with the same signatures (``rc3r.robots.rr3.engine`` for the paper's arm,
-    ``rc3r.robots.pinocchio_kernel`` for any serial chain).
+    ``rc3r.robots.pinocchio_supply`` for any serial chain).
 ``kc`` : ndarray (float64, 1-d)
     The rigid body's constants packed for those functions (the 3R: theta, l2, g0; a chain:
     its kinematic constants and the standard parameters). They receive it unchanged.
@@ -17,7 +17,11 @@ names its supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`, ``(module,
 The supply is the **plant's** model; the law evaluates the same regressor (the model's
 kinematics equal the plant's, :func:`rc3r.simulate.simulate` checks them), at the model's theta.
 ``q``, ``qd``, ``v``, ``a``, ``tau``, ``qdd`` are (n,) arrays, ``Y`` is (n, p); nothing may be
-allocated per call in the hot path: scratch space comes from :func:`make_work`, called once per
+allocated per call in the hot path. The law needs ``Y`` only through ``xi = Y^T r`` and
+``u = w + Y theta``: the control step calls :func:`passes_into` once, then :func:`xi_into` (the
+laws that use it) and :func:`apply_into`; a supply may fill ``Y`` there and contract it (the 3R)
+or compute both contractions without forming it (a chain, O(n)). :func:`regressor_into` serves
+the rest (the python engine, tests): scratch space comes from :func:`make_work`, called once per
 integrator call. The stubs here fill NaN and report failure (an uninstantiated engine stops at
 its first step with "mass matrix not positive definite").
 """
@@ -46,3 +50,21 @@ def forward_dynamics_into(kc, q, qd, tau, qdd, wk):
     """Fill ``qdd = M(q)^{-1} (tau - C(q, qd) qd - g(q))``; return False if M(q) is not positive definite."""
     qdd[:] = np.nan
     return False
+
+
+@njit(**_JIT)
+def passes_into(kc, q, qd, v, a, Y, wk):
+    """Prepare :func:`xi_into` and :func:`apply_into` at the state ``(q, qd, v, a)`` (may fill ``Y``)."""
+    Y[:, :] = np.nan
+
+
+@njit(**_JIT)
+def xi_into(kc, Y, r, xi, wk):
+    """Fill ``xi`` (p,) with ``Y^T r`` at the state of the last :func:`passes_into`."""
+    xi[:] = np.nan
+
+
+@njit(**_JIT)
+def apply_into(kc, Y, th, w, u, wk):
+    """Fill ``u`` (n,) with ``w + Y th`` at the state of the last :func:`passes_into`."""
+    u[:] = np.nan

@@ -21,7 +21,7 @@ The plant's effects (friction, saturation: the fields ``fx`` of
 by :mod:`rc3r.plants._kernels`; the law by the generic kernels of
 :mod:`rc3r.controllers._kernels` (selected by its integer code). The robot enters only
 through its **kernel supply** (:mod:`._template` states the contract): ``_make_work``,
-``_regressor``, ``_fd`` below, on its packed constants ``kc``. n is ``U.shape[1]``, p is
+``_passes``, ``_xi``, ``_apply`` and ``_fd`` below, on its packed constants ``kc``. n is ``U.shape[1]``, p is
 ``cp[0]``.
 
 This module is never run as it stands: the import line marked ``# kernel supply`` names the
@@ -37,9 +37,9 @@ import math
 import numpy as np
 from numba import njit
 
-from rc3r.controllers._kernels import apply_regressor, law_output, law_signals
+from rc3r.controllers._kernels import law_signals, law_theta, uses_xi
 from rc3r.plants._kernels import actuate, apply_effects, measure
-from rc3r.simulate.engines._template import forward_dynamics_into as _fd, make_work as _make_work, regressor_into as _regressor  # kernel supply
+from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
 from rc3r.trajectory import reference_into
 
@@ -48,11 +48,15 @@ _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
 @njit(**dict(_JIT, inline="always"))
 def control(law, cp, q, qd, z, ref, kc, wk, u, zdot, Y, th_eff, v, a, r, w):
-    """u (n,) and zdot of a registered law (code ``law``) on the supply's regressor; returns ||Y^T r||."""
+    """u (n,) and zdot of a registered law (code ``law``) on the supply's regressor; returns ||Y^T r||.
+
+    ``u = w + Y th_eff`` and ``xi = Y^T r`` through the supply's contractions (``Y`` is scratch)."""
     law_signals(law, cp, q, qd, ref, v, a, r, w)
-    _regressor(kc, q, qd, v, a, Y, wk)
-    yn = law_output(law, cp, Y, r, z, th_eff, zdot)
-    apply_regressor(Y, th_eff, w, u)
+    _passes(kc, q, qd, v, a, Y, wk)
+    if uses_xi(law):
+        _xi(kc, Y, r, th_eff, wk)
+    yn = law_theta(law, cp, q.shape[0], z, th_eff, zdot)
+    _apply(kc, Y, th_eff, w, u, wk)
     return yn
 
 
@@ -303,7 +307,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     return OK, t_out.shape[0], nrhs, nsteps, nrej, t
 
 
-@njit(**_JIT)
+@njit(**dict(_JIT, inline="always"))
 def _plant_rhs(x, u, kc, wk, fx, fric, xdot, tau):
     """Plant only, under the delivered torque ``u``: the joint torque adds the friction of ``fx``."""
     n = u.shape[0]
