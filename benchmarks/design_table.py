@@ -5,7 +5,11 @@ For each arm and each rate it runs (as subprocesses, so each has its own process
     rc3r design --urdf ARM.urdf [--lock J=V ...] --payload 0:3 --rate RATE --n N --duration D \
         --seed SEED --workers W --out OUT/ARM-RATE/design
     rc3r montecarlo --config OUT/ARM-RATE/design/design.toml --n N --duration D --seed SEED \
-        --controllers robust,fbl --workers W --out OUT/ARM-RATE/mc
+        --controllers LAW,fbl --workers W --out OUT/ARM-RATE/mc
+
+where LAW is the robust law the design recommends (``recommendation`` in design.json: eq. 6
+``robust`` or eq. 7 ``robust-coeff``, whichever was clean on every plant with the smaller worst
+error; ``robust`` if neither),
 
 and writes ``OUT/design_table.md`` (one row per arm and rate) and ``OUT/design_table.json`` (every
 number, the commands, the seed). ``--effects`` adds ``--friction urdf --torque-limit urdf`` to both
@@ -105,12 +109,15 @@ def one(arm: str, rate: float, args, base: Path) -> dict:
     info = json.loads(info_path.read_text())
     row.update(_design_fields(info))
     limit = info.get("effort_limit")
+    # the robust law the design recommends (eq. 6 or eq. 7, design.json), or eq. 6 if it recommends none
+    law = (info.get("recommendation") or {}).get("law") or "robust"
     mc_cmd = _rc3r() + ["montecarlo", "--config", str(info_path.with_name("design.toml")),
-                        "--controllers", "robust,fbl"] + effects + common + ["--out", str(where / "mc")]
+                        "--controllers", f"{law},fbl"] + effects + common + ["--out", str(where / "mc")]
     rc_m, wall_m = _run(mc_cmd, where / "mc.log")
     rows = _rows(where / "mc" / "runs.csv")
-    row.update({"mc_cmd": mc_cmd, "mc_exit": rc_m, "mc_wall_s": wall_m,
-                "mc": {law: _summary([r for r in rows if r["controller"] == law], limit) for law in ("robust", "fbl")}})
+    row.update({"mc_cmd": mc_cmd, "mc_exit": rc_m, "mc_wall_s": wall_m, "robust_law": law,
+                "mc": {key: _summary([r for r in rows if r["controller"] == name], limit)
+                       for key, name in (("robust", law), ("fbl", "fbl"))}})
     return row
 
 
@@ -163,20 +170,20 @@ def _refresh(rows: list[dict]) -> list[dict]:
 
 
 def markdown(rows: list[dict]) -> str:
-    lines = ["| arm | rate [Hz] | b [1/s] (L_K / b) | K range [N m s/rad] | Lambda [1/s] | eps | design clean | worst max\\|e\\| robust "
-             "[rad] | FBL (design) | FBL (montecarlo) | robust / FBL | torque peak / limit | verdicts robust | "
-             "verdicts FBL | robust-coeff (design) | wall s (design + mc) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| arm | rate [Hz] | b [1/s] (L_K / b) | K range [N m s/rad] | Lambda [1/s] | eps | design clean | robust law "
+             "(montecarlo) | worst max\\|e\\| robust [rad] | FBL (design) | FBL (montecarlo) | robust / FBL | torque peak / limit | "
+             "verdicts robust | verdicts FBL | robust-coeff (design) | wall s (design + mc) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "K" not in r:
-            lines.append(f"| {r['arm']} | {r['rate']:g} | design failed (exit {r['design_exit']}) | | | | | | | | | | | | | "
+            lines.append(f"| {r['arm']} | {r['rate']:g} | design failed (exit {r['design_exit']}) | | | | | | | | | | | | | | "
                          f"{r['design_wall_s']:.0f} |")
             continue
         rob, fbl = r.get("mc", {}).get("robust", {}), r.get("mc", {}).get("fbl", {})
         ratio = (rob["worst_error"] / fbl["worst_error"]) if rob.get("worst_error") and fbl.get("worst_error") else None
         lines.append(
             f"| {r['arm']}{' + URDF friction, limits' if _effects(r) else ''} | {r['rate']:g} | {_f(r.get('bandwidth'))} ({_f(r.get('L_K_over_b'), '.3g')}) | {min(r['K']):.3g}..{max(r['K']):.3g} | {r['Lambda']:.3g} | {r['eps']:.3g} | "
-            f"{'yes' if r['ok'] else 'NO'} | {_f(rob.get('worst_error'))} | {_f(r.get('design_fbl_worst_error'))} | "
+            f"{'yes' if r['ok'] else 'NO'} | {r.get('robust_law', 'robust')} | {_f(rob.get('worst_error'))} | {_f(r.get('design_fbl_worst_error'))} | "
             f"{_f(fbl.get('worst_error'))} | {_f(ratio, '.2g')} | {_f(rob.get('u_over_limit'), '.2g')} | {_v(rob)} | "
             f"{_v(fbl)} | {_rc(r)} | {r['design_wall_s']:.0f} + {r.get('mc_wall_s', 0):.0f} |")
     return "\n".join(lines) + "\n"

@@ -383,3 +383,20 @@ def test_identifiability_of_hand_made_regressors():
     assert "s2/s1 = 5.0e-07" in warn[0]
     ratio, warn = identifiability(np.diag([2.0, 0.5]), ("a", "b"))
     assert ratio == pytest.approx(0.25, rel=1e-12) and warn == []
+
+
+def test_default_trajectory_keeps_half_the_urdf_velocity_limit(ur5):
+    """The Kinova of example-robot-data limits its joints to 0.628 and 0.838 rad/s: its default sines
+    (omega = 1 rad/s) get A_i = 0.5 x v_max,i, so max_t |qd_d,i| = 0.5 v_max,i (sampled every 1 ms over one
+    period: equal to 1e-6 relative); the UR5's limits (3.15 rad/s) leave its 0.5 rad amplitude as it was
+    (peak speed 0.5 rad/s: A omega)."""
+    from rc3r.robots.pinocchio import VELOCITY_SHARE
+
+    kinova = PinocchioRobot.from_urdf(example_robot_data_dir() / "kinova_description/robots/kinova.urdf")
+    vmax = np.asarray(kinova.model.velocityLimit, float)
+    assert vmax.max() < 1.0
+    t = np.arange(0.0, 2 * np.pi, 1e-3)
+    for arm, expect in ((kinova, VELOCITY_SHARE * vmax), (ur5, np.full(ur5.n, 0.5))):
+        traj = arm.default_trajectory()
+        peak = np.abs(np.array([np.asarray(traj.evaluate(s)[1]).ravel() for s in t])).max(axis=0)
+        np.testing.assert_allclose(peak, expect, rtol=1e-6)

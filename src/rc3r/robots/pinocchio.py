@@ -58,10 +58,13 @@ from .base import Robot, stack_states
 from .base_parameters import (BaseParameters, base_parameters, check_model, physical_issues,
                               standard_parameter_names)
 
-__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "example_robot_data_dir"]
+__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir"]
 
 #: Position limit [rad] given to ``continuous`` joints rebuilt as ``revolute``.
 CONTINUOUS_LIMIT = 1000.0
+
+#: The default trajectory's peak speed is at most this share of a joint's URDF velocity limit.
+VELOCITY_SHARE = 0.5
 
 #: ``PinocchioRobot.named(name)``: URDF path inside example-robot-data's ``robots/``
 #: directory and the joints to lock (name -> value [rad or m]).
@@ -269,7 +272,7 @@ class PinocchioRobot(Robot):
         """None: a URDF arm has no default uncertainty (give ``--box`` or ``--payload``)."""
         return None
 
-    def _sine_centres(self, amplitude: float):
+    def _sine_centres(self, amplitude: float, omega: float = 1.0):
         """Centre c (n,) and amplitude A (n,) of each joint's default sine, and the degenerate joints."""
         lo, hi = self.joint_limits
         degenerate = ~(hi - lo > 0)  # lower >= upper (or NaN): no range to stay inside
@@ -277,21 +280,25 @@ class PinocchioRobot(Robot):
             mid = np.where(degenerate, np.where(np.isfinite(lo), lo, 0.0), 0.5 * (lo + hi))
         c = np.clip(np.nan_to_num(mid, nan=0.0), -math.pi, math.pi)
         amp = np.where(degenerate, amplitude, np.minimum(amplitude, 0.3 * 0.5 * (hi - lo)))
-        return c, amp, np.flatnonzero(degenerate)
+        vel = np.asarray(self._model.velocityLimit, dtype=float)  # 0 or inf: no limit given
+        speed = np.where((vel > 0) & np.isfinite(vel), VELOCITY_SHARE * vel / abs(omega), np.inf)
+        return c, np.minimum(amp, speed), np.flatnonzero(degenerate)
 
     def default_trajectory(self, amplitude: float = 0.5, omega: float = 1.0):
         r"""Sines inside the joint limits: :math:`q_{d,i} = c_i + A_i \sin(\omega t + i\pi/3)`.
 
         ``c_i`` is the middle of joint i's range (clipped to [-pi, pi]), ``A_i = min(amplitude,
-        0.3 x half the range)`` [rad], ``omega`` [rad/s]; so the reference stays inside the limits
-        with a margin of at least 70 % of the half range. A joint whose limits are no range
+        0.3 x half the range, VELOCITY_SHARE x v_max,i / omega)`` [rad], ``omega`` [rad/s]; so the
+        reference stays inside the limits with a margin of at least 70 % of the half range, and its
+        speed at most half the URDF's velocity limit ``v_max,i`` (where one is given: the Kinova's
+        0.63 rad/s makes its sines 0.31 rad; the other arms' limits are above 1 rad/s). A joint whose limits are no range
         (``lower >= upper``, e.g. the double pendulum of example-robot-data: both 0) gets
         ``c_i = lower`` (clipped) and the fixed amplitude ``A_i = amplitude``, instead of a
         constant q_d; :meth:`default_trajectory_warnings` says so.
         """
         from ..trajectory import Sines
 
-        c, amp, _ = self._sine_centres(amplitude)
+        c, amp, _ = self._sine_centres(amplitude, omega)
         terms = tuple((i + 1, float(amp[i]), float(omega), i * math.pi / 3) for i in range(self.n))
         return Sines(tuple(float(x) for x in c), terms)
 
