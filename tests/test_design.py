@@ -300,3 +300,16 @@ def test_recommendation_is_the_clean_robust_variant_with_the_smaller_worst_error
     assert rec["worst_error"] == (err7 if law == "robust-coeff" else err6)
     assert rec["fbl_worst_error"] == 0.75
     assert ("not clean" in rec["why"]) == (eps6 is None or not rc_clean)
+
+
+def test_eq7_counts_only_if_clean_at_the_margin_rate_too():
+    """eq. 7 is verified like eq. 6, on every plant at the rate and at rate / margin: clean at the rate but not
+    at rate / margin it is not recommended; the design is verified (``ok``) iff some robust law is clean at
+    both rates, and ``eq6_ok`` says whether eq. 6 is."""
+    only7 = _result(None, None, True, 0.186)
+    assert only7.ok and not only7.eq6_ok and only7.recommendation()["law"] == "robust-coeff"
+    only7.baselines["robust-coeff"]["clean_low"] = False
+    assert only7.recommendation() is None and not only7.ok
+    both = _result(17.4, 0.03, True, 0.01)
+    both.baselines["robust-coeff"]["clean_low"] = False
+    assert both.ok and both.eq6_ok and both.recommendation()["law"] == "robust"

@@ -70,7 +70,7 @@ def design_markdown(result, command: str = "") -> str:
               f"{d.eps_stable:.4g};",
               f"* fast form (free of oscillation at {result.rate:g} Hz): eps = {d.eps:.4g};",
               f"* verified: **eps = {_f(result.eps, '.4g')}** ({_f(None if result.eps is None else result.eps / d.eps_stable, '.3g')}"
-              " x the rule's stability boundary)" + ("" if result.ok else
+              " x the rule's stability boundary)" + ("" if result.eq6_ok else
                                                      " -- NO eps tried was clean at both rates: see the table"),
               "", "## eps tried (robust law)", "",
               f"| eps | at {result.rate:g} Hz | worst max\\|e\\| [rad] | worst chattering [N m/s] | "
@@ -103,8 +103,11 @@ def design_markdown(result, command: str = "") -> str:
     for law in ("robust-coeff", "adaptive"):
         s = result.baselines.get(law)
         if s:
-            lines.append(f"* {law} at {result.rate:g} Hz (gains above, verified once): {_verdicts(s)}, "
-                         f"worst max|e| {_f(s.get('worst_error'))} rad.")
+            low = s.get("at_low")
+            lines.append(f"* {law} at {result.rate:g} Hz (gains above): {_verdicts(s)}, "
+                         f"worst max|e| {_f(s.get('worst_error'))} rad"
+                         + (f"; at {result.rate / result.margin:g} Hz: {_verdicts(low)}, worst max|e| "
+                            f"{_f(low.get('worst_error'))} rad." if low else " (at the rate only)."))
     rec = result.recommendation()
     if rec is not None:
         f = rec["fbl_worst_error"]
@@ -112,7 +115,7 @@ def design_markdown(result, command: str = "") -> str:
                      f" {rec['why']}; FBL {_f(f)} rad. Run it: `rc3r montecarlo --config design.toml "
                      f"--controllers {rec['law']},fbl`.")
     else:
-        lines.append("* recommended robust law: none (neither eq. 6 nor eq. 7 was clean on every plant).")
+        lines.append("* recommended robust law: none (neither eq. 6 nor eq. 7 was clean on every plant at both rates).")
     low = result.lowest_clean_rate()
     tried = ", ".join(f"{r['rate']:.4g} Hz {'clean' if r['clean'] else _verdicts(r)}" for r in result.low_rates)
     lines += [f"* lowest rate at which the design stayed clean: {_f(low, '.4g')} Hz"

@@ -14,9 +14,11 @@ trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
    while every run is ``clean``, or backs off by doubling while one chatters, saturates, leaves the
    joint limits or diverges (at most ``steps`` times), then bisects the bracket once (geometric
    mean); the smallest clean eps is the design;
-4. runs the baselines and the other laws once on the same plants at the rate: FBL with the rule's
-   Kp, Kd, eq. (7) with eps_i scaled like eps (the fast form's eps_i if that is not clean),
-   the adaptive law with the rule's Gamma;
+4. runs the baselines and the other laws on the same plants at the rate: FBL with the rule's
+   Kp, Kd, the adaptive law with the rule's Gamma, and eq. (7) with eps_i scaled like eps (the fast
+   form's eps_i if that is not clean), at the rate and at rate / margin like eq. 6; the design is
+   verified (:attr:`DesignResult.ok`) if eq. 6 or eq. 7 is clean on every plant at both rates, and
+   :meth:`DesignResult.recommendation` names the one to run;
 5. runs the design at rates below rate / margin (steps of sqrt(2), on the first four plants) to find
    the lowest rate at which it stays clean.
 """
@@ -134,9 +136,15 @@ class DesignResult:
     eps_i: float | None = None
 
     @property
-    def ok(self) -> bool:
-        """True if a clean eps was found at the rate and at rate / margin on every plant."""
+    def eq6_ok(self) -> bool:
+        """True if a clean eps of eq. 6 was found at the rate and at rate / margin on every plant."""
         return self.eps is not None
+
+    @property
+    def ok(self) -> bool:
+        """True if a robust law is verified: eq. 6 (:attr:`eq6_ok`) or eq. 7 clean on every plant at the rate
+        and at rate / margin (:meth:`recommendation` is not None)."""
+        return self.recommendation() is not None
 
     @property
     def chosen(self) -> dict | None:
@@ -155,7 +163,7 @@ class DesignResult:
 
     def recommendation(self) -> dict | None:
         """The robust law to run: of eq. 6 (``robust``, the chosen eps, if clean at both rates) and eq. 7
-        (``robust-coeff``, verified once at the rate, if clean on every plant) the one with the smaller
+        (``robust-coeff``, if clean on every plant at the rate and at rate / margin) the one with the smaller
         worst max|e| at the rate; ``{"law", "worst_error", "fbl_worst_error", "why"}``, or None if neither
         is clean. (eq. 6's boundary layer must be thick enough for the sampled loop; where that leaves
         its robust term too weak, eq. 7's per-coefficient layers often are not: docs/design.md.)"""
@@ -163,7 +171,7 @@ class DesignResult:
         if self.chosen is not None:
             cands.append(("robust", self.chosen["at_rate"].get("worst_error")))
         rc = self.baselines.get("robust-coeff") or {}
-        if rc.get("clean") and rc.get("worst_error") is not None:
+        if rc.get("clean") and rc.get("clean_low", True) and rc.get("worst_error") is not None:
             cands.append(("robust-coeff", rc["worst_error"]))
         cands = [(law, e) for law, e in cands if e is not None and np.isfinite(e)]
         if not cands:
@@ -176,14 +184,15 @@ class DesignResult:
                 "fbl_worst_error": (self.baselines.get("fbl") or {}).get("worst_error"), "why": why}
 
     def lowest_clean_rate(self) -> float | None:
-        """The lowest rate tested at which the design stayed clean (rate / margin at least, if verified)."""
+        """The lowest rate tested at which eq. 6's design stayed clean (rate / margin at least, if verified)."""
         clean = [r["rate"] for r in self.low_rates if r["clean"]]
-        base = [self.rate / self.margin] if self.ok else []
+        base = [self.rate / self.margin] if self.eq6_ok else []
         return min(clean + base) if clean + base else None
 
     def describe(self) -> dict:
         """Everything as plain data."""
         return {"rate": self.rate, "margin": self.margin, "eps": self.eps, "eps_i": self.eps_i, "ok": self.ok,
+                "eq6_ok": self.eq6_ok,
                 "design": self.design.describe(), "levels": self.levels, "baselines": self.baselines,
                 "low_rates": self.low_rates, "lowest_clean_rate": self.lowest_clean_rate(),
                 "plants": self.plants, "model": self.model, "spectrum": self.spectrum,
@@ -339,11 +348,16 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     if design.eps_i is not None:
         sl = {"K": sliding["K"], "Lambda": sliding["Lambda"]}
         tried = [design.eps_i * factor] + ([design.eps_i] if factor != 1.0 else [])
-        for eps_i in tried:
-            rc = summarize(run.run(run.jobs("robust-coeff", sl, eps_i, rate, plants), f"robust-coeff, eps_i {eps_i:.4g}"))
-            res.baselines["robust-coeff"] = {**rc, "eps_i": float(eps_i)}
+        for eps_i in tried:  # verified like eq. 6: every plant at the rate and at rate / margin
+            jobs = run.jobs("robust-coeff", sl, eps_i, rate, plants) + \
+                (run.jobs("robust-coeff", sl, eps_i, low, plants) if margin > 1 else [])
+            rows = run.run(jobs, f"robust-coeff, eps_i {eps_i:.4g}")
+            rc = summarize([r for r in rows if r["rate_hz"] == float(rate)])
+            rc_low = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else rc
+            res.baselines["robust-coeff"] = {**rc, "eps_i": float(eps_i), "at_low": rc_low,
+                                             "clean_low": bool(rc_low["clean"])}
             res.eps_i = float(eps_i)
-            if rc["clean"]:
+            if rc["clean"] and rc_low["clean"]:
                 break
     res.baselines["adaptive"] = summarize(run.run(run.jobs("adaptive", design.gains("adaptive"), None, rate,
                                                            plants), "adaptive"))
