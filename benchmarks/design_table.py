@@ -126,7 +126,7 @@ def _design_fields(info: dict) -> dict:
     g = info["gains"]["robust"]
     ch = next((lv for lv in info["levels"] if lv["eps"] == info["eps"]), None)
     base = info.get("baselines", {})
-    return {"ok": info["ok"], "K": g["K"], "Lambda": g["Lambda"], "eps": g["eps"],
+    return {"ok": info["ok"], "K": g["K"], "K_inertia": g.get("K_inertia"), "Lambda": g["Lambda"], "eps": g["eps"],
             "eps_rule": info["design"]["eps"], "eps_stable": info["design"]["eps_stable"],
             "fbl_gains": info["gains"]["fbl"], "effort_limit": info.get("effort_limit"),
             "design_worst_error": None if ch is None else ch["at_rate"]["worst_error"],
@@ -137,6 +137,15 @@ def _design_fields(info: dict) -> dict:
             "rho": info["design"]["rho"], "L_Y": info["design"]["L_Y"],
             "lowest_clean_rate": info.get("lowest_clean_rate"), "eps_tried": len(info["levels"]),
             "design_wall_s_inside": info.get("wall_s")}
+
+
+def _krange(K, b=None) -> str:
+    """``min..max`` of K's diagonal, ``(full)`` if K is a matrix; ``b M(q_d)`` for a scheduled K."""
+    if b:
+        return f"{b:.3g} M(q_d)"
+    k = np.asarray(K, dtype=float)
+    d = np.diag(k) if k.ndim == 2 else k
+    return f"{d.min():.3g}..{d.max():.3g}" + (" (full)" if k.ndim == 2 else "")
 
 
 def _f(x, fmt=".3g") -> str:
@@ -170,7 +179,7 @@ def _refresh(rows: list[dict]) -> list[dict]:
 
 
 def markdown(rows: list[dict]) -> str:
-    lines = ["| arm | rate [Hz] | b [1/s] (L_K / b) | K range [N m s/rad] | Lambda [1/s] | eps | design clean | robust law "
+    lines = ["| arm | rate [Hz] | b [1/s] (L_K / b) | K [N m s/rad] | Lambda [1/s] | eps | design clean | robust law "
              "(montecarlo) | worst max\\|e\\| robust [rad] | FBL (design) | FBL (montecarlo) | robust / FBL | torque peak / limit | "
              "verdicts robust | verdicts FBL | robust-coeff (design) | wall s (design + mc) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -182,7 +191,7 @@ def markdown(rows: list[dict]) -> str:
         rob, fbl = r.get("mc", {}).get("robust", {}), r.get("mc", {}).get("fbl", {})
         ratio = (rob["worst_error"] / fbl["worst_error"]) if rob.get("worst_error") and fbl.get("worst_error") else None
         lines.append(
-            f"| {r['arm']}{' + URDF friction, limits' if _effects(r) else ''} | {r['rate']:g} | {_f(r.get('bandwidth'))} ({_f(r.get('L_K_over_b'), '.3g')}) | {min(r['K']):.3g}..{max(r['K']):.3g} | {r['Lambda']:.3g} | {r['eps']:.3g} | "
+            f"| {r['arm']}{' + URDF friction, limits' if _effects(r) else ''} | {r['rate']:g} | {_f(r.get('bandwidth'))} ({_f(r.get('L_K_over_b'), '.3g')}) | {_krange(r['K'], r.get('K_inertia'))} | {r['Lambda']:.3g} | {r['eps']:.3g} | "
             f"{'yes' if r['ok'] else 'NO'} | {r.get('robust_law', 'robust')} | {_f(rob.get('worst_error'))} | {_f(r.get('design_fbl_worst_error'))} | "
             f"{_f(fbl.get('worst_error'))} | {_f(ratio, '.2g')} | {_f(rob.get('u_over_limit'), '.2g')} | {_v(rob)} | "
             f"{_v(fbl)} | {_rc(r)} | {r['design_wall_s']:.0f} + {r.get('mc_wall_s', 0):.0f} |")

@@ -169,8 +169,8 @@ def test_registry_holds_the_five_laws_and_one_gain_table():
     """Every built-in law is registered; the command line's defaults are the classes' defaults."""
     assert set(LAWS) >= {"fbl", "robust", "robust-coeff", "adaptive", "pd"}
     assert default_gains("pd") == {"Kp": 500.0, "Kd": 100.0}
-    assert default_gains("adaptive") == {"K": 100.0, "Lambda": 50.0, "Gamma": 10.0}
-    assert default_gains("robust") == {"K": 100.0, "Lambda": 50.0, "eps": 0.5}
+    assert default_gains("adaptive") == {"K": 100.0, "Lambda": 50.0, "K_inertia": 0.0, "Gamma": 10.0}
+    assert default_gains("robust") == {"K": 100.0, "Lambda": 50.0, "K_inertia": 0.0, "eps": 0.5}
     assert PDGravity(np.ones(15)).Kp == 500.0 and Adaptive(np.ones(15)).Gamma[0] == 10.0
 
 
@@ -250,11 +250,14 @@ def test_a_gain_vector_of_the_wrong_length_is_refused_naming_the_sizes(K):
 
 
 @pytest.mark.parametrize("K, message", [
-    (np.ones((3, 3)), r"K must be a number or a vector, got shape \(3, 3\)"),
+    (np.ones((3, 3)), "K as a matrix must be positive definite"),  # symmetric, rank 1
+    (np.ones((2, 3)), r"K as a matrix must be square, got shape \(2, 3\)"),
+    ([[2.0, 1.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]], "K as a matrix must be symmetric"),
+    ([[1.0, 0.0], [0.0, np.inf]], "K must be finite"),
     ([1.0, [2.0, 3.0]], "K must be numbers"),          # ragged: numpy's ValueError, reworded
     ([1.0, None, 2.0], "K must be finite"),            # None -> nan
     ({"a": 1}, "K must be numbers"),                   # numpy's TypeError, reworded
-], ids=["matrix", "ragged", "none", "dict"])
+], ids=["singular-matrix", "non-square", "non-symmetric", "inf-matrix", "ragged", "none", "dict"])
 def test_malformed_gains_are_refused_with_one_line(K, message):
     with pytest.raises(ParameterError, match=message):
         Robust(np.ones(15), K=K)
@@ -412,3 +415,72 @@ def test_inertia_scaled_gain_default_bandwidth_and_small_bandwidths():
 
     np.testing.assert_array_equal(inertia_scaled_gain(Unit(), np.zeros(2)), [50.0, 100.0])
     np.testing.assert_array_equal(inertia_scaled_gain(Unit(), np.zeros(2), 0.5), [0.5, 1.0])
+
+
+@pytest.mark.parametrize("name", ["robust", "robust-coeff", "adaptive"])
+def test_a_matrix_k_gives_w_equal_minus_k_r(name, rng):
+    """A symmetric positive definite K (6 x 6) on the UR5: the law's torque equals Y theta_eff - K r with Y
+    from Pinocchio's own regressor (``regressor_pinocchio``) and theta_eff computed here from its formula,
+    to 1e-10 relative (the compiled kernels pack K's diagonal and, last, its off-diagonal part)."""
+    import rc3r
+    from rc3r.controllers import make_law
+
+    arm = rc3r.load_robot("ur5")
+    A = rng.standard_normal((6, 6))
+    Kf = A @ A.T + 6.0 * np.eye(6)
+    th = np.asarray(arm.theta, float)
+    gains = {"robust": dict(rho=3.0, eps=5.0), "robust-coeff": dict(rho_i=np.full(arm.p, 0.2), eps_i=0.5),
+             "adaptive": dict(Gamma=1.0)}[name]
+    law = make_law(name, th, K=Kf, Lambda=20.0, **gains)
+    assert law.pack(6).size > make_law(name, th, K=np.diag(Kf), Lambda=20.0, **gains).pack(6).size
+    for _ in range(5):
+        q, qd = rng.uniform(-1, 1, (2, 6))
+        ref = rng.uniform(-1, 1, (3, 6))
+        u, zdot, _ = law.torque(arm, q, qd, ref)
+        e, ed = q - ref[0], qd - ref[1]
+        r = ed + 20.0 * e
+        Y = arm.regressor_pinocchio(q, qd, ref[1] - 20.0 * e, ref[2] - 20.0 * ed)
+        xi = Y.T @ r
+        if name == "robust":
+            th_eff = th - 3.0 * xi / max(np.linalg.norm(xi), 5.0)
+        elif name == "robust-coeff":
+            th_eff = th - 0.2 * xi / np.maximum(np.abs(xi), 0.5)
+        else:
+            th_eff = th
+            np.testing.assert_allclose(zdot, -xi, rtol=1e-10, atol=1e-12)
+        want = Y @ th_eff - Kf @ r
+        assert np.abs(u - want).max() <= 1e-10 * np.abs(want).max()
+    assert law.k_min() == pytest.approx(np.linalg.eigvalsh(Kf)[0], rel=1e-12)
+
+
+@pytest.mark.parametrize("K", [0.0, 5.0], ids=["scheduled-only", "plus-diagonal"])
+def test_a_scheduled_k_subtracts_b_m_of_the_reference_times_r(K, rng):
+    """``K_inertia`` b: w = -(K + b M(q_d)) r with M from pin.crba at q_d (the law's theta is the UR5's own,
+    so its mass matrix is Pinocchio's): the torque equals Y theta_eff - (K + b M(q_d)) r to 1e-10 relative;
+    K = 0 is allowed with b > 0 (b M is positive definite), K < 0 is not; k_min adds b m_min."""
+    import pinocchio as pin
+
+    import rc3r
+    from rc3r.controllers import make_law
+
+    arm = rc3r.load_robot("ur5")
+    th = np.asarray(arm.theta, float)
+    law = make_law("robust", th, rho=3.0, K=K, Lambda=10.0, eps=5.0, K_inertia=25.0)
+    data = arm.model.createData()
+    for _ in range(5):
+        q, qd = rng.uniform(-1, 1, (2, 6))
+        ref = rng.uniform(-1, 1, (3, 6))
+        u, _, _ = law.torque(arm, q, qd, ref)
+        e, ed = q - ref[0], qd - ref[1]
+        r = ed + 10.0 * e
+        Y = arm.regressor_pinocchio(q, qd, ref[1] - 10.0 * e, ref[2] - 10.0 * ed)
+        xi = Y.T @ r
+        M = pin.crba(arm.model, data, ref[0])
+        M = np.triu(M) + np.triu(M, 1).T
+        want = Y @ (th - 3.0 * xi / max(np.linalg.norm(xi), 5.0)) - K * r - 25.0 * M @ r
+        assert np.abs(u - want).max() <= 1e-10 * np.abs(want).max()
+    assert law.k_min(0.2) == pytest.approx(K + 25.0 * 0.2)
+    with pytest.raises(ParameterError, match="K must be >= 0"):
+        make_law("robust", th, K=-1.0, K_inertia=25.0)
+    with pytest.raises(ParameterError, match="K_inertia must be >= 0"):
+        make_law("robust", th, K_inertia=-1.0)

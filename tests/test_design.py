@@ -59,7 +59,7 @@ def test_fast_form_against_a_hand_computed_case():
     the stability boundary T rho L_Y / (2 - T L_K) = 0.02/1.95; FBL Kp = 400, Kd = 40;
     Gamma = min(10, 0.95 * 50 / (1e-3 * 2)) = 10; eq. 7 with rho_i = (3, 4): L = max(3/2, 4/0.5) = 8."""
     sp = _hand_spectrum()
-    d = fast_design(sp, 1000.0, rho=10.0, rho_i=[3.0, 4.0])
+    d = fast_design(sp, 1000.0, rho=10.0, rho_i=[3.0, 4.0], coupling="diag")
     assert d.L_Y == pytest.approx(2.0, rel=1e-12) and d.bandwidth == pytest.approx(50.0, rel=1e-12)
     np.testing.assert_allclose(d.K, [100.0, 25.0], rtol=1e-12)
     assert d.Lambda == pytest.approx(20.0) and d.L_K == pytest.approx(50.0, rel=1e-12)
@@ -74,6 +74,14 @@ def test_fast_form_against_a_hand_computed_case():
     edge = rc3r.make_law("robust", np.zeros(2), rho=10.0, K=d.K, Lambda=20.0, eps=d.eps_stable)
     assert check(edge, sp, 1000.0) == pytest.approx(2.0, rel=1e-12)  # = stability_limit(0) / real_limit(0)
     assert eps_boundary(sp, 1000.0, 10.0, d.K) == pytest.approx(d.eps_stable, rel=1e-12)
+    # the scheduled K (the default): K = 0, K_inertia = b = 50, the same L_K = 50 and eps by hand
+    s_ = fast_design(sp, 1000.0, rho=10.0, rho_i=[3.0, 4.0])
+    assert s_.scaling == "inertia" and s_.K_inertia == pytest.approx(50.0) and np.all(s_.K == 0.0)
+    assert s_.L_K == pytest.approx(50.0) and s_.eps == pytest.approx(0.02 / 0.95, rel=1e-12)
+    assert s_.gains("robust") == {"K": [0.0, 0.0], "Lambda": pytest.approx(20.0), "K_inertia": pytest.approx(50.0),
+                                  "eps": pytest.approx(0.02 / 0.95)}
+    law = rc3r.make_law("robust", np.zeros(2), rho=10.0, **s_.gains("robust"))
+    assert check(law, sp, 1000.0) == pytest.approx(1.0, rel=1e-12)
 
 
 def test_delay_and_margin_shrink_the_budget():
@@ -313,3 +321,32 @@ def test_eq7_counts_only_if_clean_at_the_margin_rate_too():
     both = _result(17.4, 0.03, True, 0.01)
     both.baselines["robust-coeff"]["clean_low"] = False
     assert both.ok and both.eq6_ok and both.recommendation()["law"] == "robust"
+
+
+def test_scheduled_k_lifts_the_bandwidth_a_constant_k_caps():
+    """The rule's default K(t) = b M(q_d(t)) keeps every mode of M^-1 K at b on the reference, so b reaches
+    its cap min(rate / 20, 125) = 25 at 500 Hz on the Kinova, where a constant diagonal K (spread 27.5 and
+    M's variation along the reference) holds b below 5 and the constant full ``b M(q_d(0))`` too; the full
+    K equals b times pin.crba at q_d(0) (symmetrized; 1e-12 relative); ``auto`` takes the constant one
+    with the larger b."""
+    import pinocchio as pin
+
+    from rc3r.design.rule import fast_design, spectrum
+    from rc3r.robots.pinocchio import PinocchioRobot, example_robot_data_dir
+
+    kinova = PinocchioRobot.from_urdf(example_robot_data_dir() / "kinova_description/robots/kinova.urdf")
+    traj = kinova.default_trajectory()
+    sp = spectrum(kinova, traj, 10.0)
+    diag, full, auto = (fast_design(sp, 500.0, rho=1.0, margin=2.0, coupling=c) for c in ("diag", "full", "auto"))
+    sched = fast_design(sp, 500.0, rho=1.0, margin=2.0)
+    assert diag.scaling == "free" and full.scaling == "full" and sched.scaling == "inertia"
+    assert diag.bandwidth < 5.0 and full.bandwidth < 5.0 and auto.bandwidth == max(diag.bandwidth, full.bandwidth)
+    assert sched.bandwidth == pytest.approx(25.0) and sched.K_inertia == pytest.approx(25.0)
+    assert sched.Lambda == pytest.approx(10.0) and sched.fbl["Kp"] == pytest.approx(100.0)
+    q0 = np.asarray(traj.evaluate(0.0)[0]).ravel()
+    M = pin.crba(kinova.model, kinova.model.createData(), q0)
+    M = np.triu(M) + np.triu(M, 1).T
+    assert np.abs(full.K - full.bandwidth * M).max() <= 1e-12 * np.abs(full.K).max()
+    assert isinstance(full.gains("robust")["K"][0], list)  # a matrix in design.toml
+    with pytest.raises(ParameterError, match="coupling must be"):
+        fast_design(sp, 500.0, rho=1.0, coupling="yes")

@@ -55,12 +55,25 @@ def _toml(table: dict, prefix: str = "") -> str:
 def _config(robot: str) -> dict:
     """A 1 kHz design for each arm: the UR5 with a payload of 0..3 kg unknown to the controller
     (inertia-scaled K, docs/generic.md), the 3R perturbed with eps = 50 (clean at 1 kHz)."""
+    if robot == "ur5-sched":  # K(t) = 25 M(q_d(t)) (rc3r design's default)
+        cfg = _config("ur5")
+        cfg["gains"]["robust"] = {"K": 0.0, "K_inertia": 25.0, "Lambda": 10.0, "eps": 5.0}
+        return cfg
+    if robot == "ur5-fullK":  # K = 50 M(q_d(0)), the full matrix (rc3r design's coupled K)
+        ur5 = rc3r.load_robot("ur5")
+        M0 = ur5.mass_matrix(ur5.default_trajectory().evaluate(0.0)[0])
+        cfg = _config("ur5")
+        cfg["gains"]["robust"]["K"] = (50.0 * 0.5 * (M0 + M0.T)).tolist()
+        return cfg
     if robot == "ur5":
         ur5 = rc3r.load_robot("ur5")
         k = [round(float(x), 4) for x in inertia_scaled_gain(ur5, ur5.default_trajectory().evaluate(0.0)[0], 50.0)]
         return {"robot": "ur5", "payload": {"mass": [0.0, 3.0]},
                 "gains": {"robust": {"K": k, "Lambda": 20.0, "eps": 5.0},
                           "adaptive": {"K": k, "Lambda": 20.0, "Gamma": 1.0}},
+                "simulation": {"rate": 1000.0, "engine": "python"}}
+    if robot == "rr3-sched":
+        return {"perturbed": True, "gains": {"adaptive": {"K": 1.0, "K_inertia": 20.0, "Lambda": 10.0, "Gamma": 1.0}},
                 "simulation": {"rate": 1000.0, "engine": "python"}}
     return {"perturbed": True, "gains": {"robust": {"eps": 50.0}, "robust-coeff": {"eps_i": 50.0}},
             "simulation": {"rate": 1000.0, "engine": "python"}}
@@ -83,7 +96,8 @@ def _check(directory) -> tuple[int, dict, str]:
 
 #: (robot, law, extra options): the brief's six cases.
 CASES = [("ur5", "fbl", ("--delay", "1")), ("ur5", "robust", ()), ("ur5", "adaptive", ()),
-         ("rr3", "robust", ()), ("rr3", "robust-coeff", ("--calls-per-sample", "2")), ("rr3", "pd", ())]
+         ("rr3", "robust", ()), ("rr3", "robust-coeff", ("--calls-per-sample", "2")), ("rr3", "pd", ()),
+         ("ur5-fullK", "robust", ()), ("ur5-sched", "robust", ()), ("rr3-sched", "adaptive", ())]
 
 
 @pytest.fixture(scope="module")

@@ -12,6 +12,8 @@ import shlex
 import sys
 import time
 
+import numpy as np
+
 from ..errors import ConfigError
 from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..provenance import provenance
@@ -141,7 +143,10 @@ def cmd_design(args) -> int:
     def num(x, fmt=".3g"):
         return "-" if x is None else format(x, fmt)
 
-    ks = ", ".join(format(k, ".3g") for k in g["K"])
+    kk = np.asarray(g["K"], dtype=float)
+    ks = ", ".join(format(k, ".3g") for k in (np.diag(kk) if kk.ndim == 2 else kk)) + \
+        ("; diagonal of b M(q_d(0))" if kk.ndim == 2 else "") + \
+        (f"] + {g['K_inertia']:.4g} M(q_d(t)) [scheduled" if g.get("K_inertia") else "")
     print(f"{word}: eps = {g['eps']:.4g} (rule: {res.design.eps:.4g}, stability boundary {res.design.eps_stable:.4g}), "
           f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad (FBL {num(fbl)}); lowest clean "
           f"rate {num(low, '.4g')} Hz; {len(res.levels)} eps tried, wall {wall:.1f} s -> {out}/")

@@ -78,6 +78,36 @@ def _array(name, x) -> np.ndarray:
     return arr
 
 
+def _is_matrix(x) -> bool:
+    """True for a 2-D array or a list of rows."""
+    return bool(isinstance(x, (list, tuple)) and x and isinstance(x[0], (list, tuple, np.ndarray))
+                or isinstance(x, np.ndarray) and x.ndim == 2)
+
+
+def _gain_matrix(name, x) -> np.ndarray:
+    """A sliding law's ``K``: a number or a vector > 0 (diagonal), or a symmetric positive definite (n, n)
+    matrix (Spong's proof holds for any constant positive definite K; :mod:`rc3r.design` uses
+    ``K = b M(q_d(0))`` where a diagonal K would be limited by the inertia's coupling)."""
+    if _is_matrix(x):
+        try:
+            arr = np.array(x, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{name} must be numbers, got {x!r}") from None
+        if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.dtype.kind != "f":
+            raise ParameterError(f"{name} as a matrix must be square, got shape {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ParameterError(f"{name} must be finite, got {arr.tolist()}")
+        if not np.allclose(arr, arr.T, rtol=1e-12, atol=1e-12 * np.abs(arr).max()):
+            raise ParameterError(f"{name} as a matrix must be symmetric")
+        arr = 0.5 * (arr + arr.T)
+        try:
+            np.linalg.cholesky(arr)
+        except np.linalg.LinAlgError:
+            raise ParameterError(f"{name} as a matrix must be positive definite") from None
+        return arr
+    return _positive(name, x)
+
+
 def _positive(name, x) -> np.ndarray:
     arr = _array(name, x)
     if np.any(arr <= 0):
@@ -169,12 +199,20 @@ class Law:
         if Y.shape != (q.size, self.p):
             raise ParameterError(f"law {self.name!r} has {self.p} coefficients, the robot's regressor "
                                  f"is {Y.shape}")
+        b = float(getattr(self, "K_inertia", 0.0))
+        if b > 0.0:  # K(t) = K + b M(q_d): M(q_d) r = Y(q_d, 0, 0, r) theta - Y(q_d, 0, 0, 0) theta (the law's theta)
+            qr, zero = np.asarray(ref[0], dtype=float), np.zeros(q.size)
+            w = w - b * ((robot.regressor(qr, zero, zero, r) - robot.regressor(qr, zero, zero, zero)) @ self.theta)
         th_eff, zdot, diag = self.output(Y, r, z)
         return Y @ th_eff + w, zdot, diag
 
     # ---- packing for compiled kernels ---------------------------------------------
     def _gain_vectors(self, n: int) -> list[np.ndarray]:  # pragma: no cover - per law
         raise NotImplementedError
+
+    def _tail(self, n: int) -> list[np.ndarray]:
+        """Entries packed after the law's own (a sliding law's off-diagonal K); none by default."""
+        return []
 
     def pack(self, n: int) -> np.ndarray:
         """``[p, theta, gains ...]`` for :mod:`rc3r.controllers._kernels` (n joints); cached per n.
@@ -186,7 +224,7 @@ class Law:
             raise ParameterError(f"law {self.name!r} has no compiled kernel")
         cache = self.__dict__.setdefault("_packed", {})
         if n not in cache:
-            cp = np.concatenate([[float(self.p)], self.theta, *self._gain_vectors(n)])
+            cp = np.concatenate([[float(self.p)], self.theta, *self._gain_vectors(n), *self._tail(n)])
             cp.flags.writeable = False
             cache[n] = cp
         return cache[n]
@@ -235,18 +273,52 @@ class PDGravity(_PD):
 
 @dataclass(frozen=True, eq=False)
 class _Sliding(Law):
-    """Laws on r = e_dot + Lambda e: ``K`` [N m s/rad] and ``Lambda`` [1/s], diagonal, > 0."""
+    r"""Laws on r = e_dot + Lambda e: ``K`` [N m s/rad] (a number or a vector > 0: diagonal; or a symmetric
+    positive definite (n, n) matrix), ``Lambda`` [1/s] (diagonal, > 0) and ``K_inertia`` b [1/s] (>= 0):
+
+    .. math:: w = -igl(K + b\,M_{	heta}(q_d(t))igr)\, r,
+
+    ``M_theta`` the mass matrix of the law's own theta at the reference (computed through the regressor:
+    :math:`M r = Y(q_d, 0, 0, r)	heta - Y(q_d, 0, 0, 0)	heta`). Spong's proof needs only
+    :math:`K(t) \succeq k I` uniformly, which a positive definite M gives (K = 0 is allowed with b > 0);
+    the scheduled part keeps every mode of :math:`M^{-1}K(t)` near b along the reference, where a constant
+    K spreads them by M's variation (docs/design.md). The packed vector ends with
+    ``[b, has_matrix, K's off-diagonal part (n * n, row-major) if K is a matrix]``
+    (:meth:`pack`, :func:`rc3r.controllers._kernels.law_signals`).
+    """
 
     K: float | np.ndarray = 100.0
     Lambda: float | np.ndarray = 50.0
+    K_inertia: float = 0.0
 
     def __post_init__(self):
         super().__post_init__()
-        object.__setattr__(self, "K", _positive("K", self.K))
+        b = _scalar("K_inertia", _nonnegative("K_inertia", self.K_inertia))
+        object.__setattr__(self, "K_inertia", b)
+        if b > 0.0 and not _is_matrix(self.K):  # b M(q_d) is positive definite: K >= 0 is enough
+            object.__setattr__(self, "K", _nonnegative("K", self.K))
+        else:
+            object.__setattr__(self, "K", _gain_matrix("K", self.K))
         object.__setattr__(self, "Lambda", _positive("Lambda", self.Lambda))
 
     def _gain_vectors(self, n):
+        if self.K.ndim == 2:
+            if self.K.shape[0] != n:
+                raise ParameterError(f"K is {self.K.shape[0]} x {self.K.shape[1]}, the robot needs {n} x {n}")
+            return [np.diag(self.K).copy(), _sized("Lambda", self.Lambda, n)]
         return [_sized("K", self.K, n), _sized("Lambda", self.Lambda, n)]
+
+    def _tail(self, n):
+        """``[K_inertia, 1 if K is a matrix else 0, K's off-diagonal part (n * n, if a matrix)]``, packed last."""
+        if self.K.ndim != 2:
+            return [np.array([self.K_inertia, 0.0])]
+        return [np.array([self.K_inertia, 1.0]), (self.K - np.diag(np.diag(self.K))).ravel()]
+
+    def k_min(self, m_min: float = 0.0) -> float:
+        """The smallest eigenvalue of ``K + K_inertia M(q_d)`` [N m s/rad] given ``lambda_min(M) >= m_min``
+        [kg m^2]: of K (its smallest entry if diagonal) plus ``K_inertia m_min``."""
+        k = float(np.linalg.eigvalsh(self.K)[0] if self.K.ndim == 2 else np.min(self.K))
+        return k + self.K_inertia * float(m_min)
 
 
 @dataclass(frozen=True, eq=False)
@@ -255,7 +327,7 @@ class Robust(_Sliding):
 
     Inside the boundary layer ``||Y^T r|| <= eps`` the law is the high gain
     ``(rho / eps) Y Y^T``: stiff (docs/control.md). Layout of :meth:`pack`:
-    ``[p, theta, K (n), Lambda (n), rho, eps]``.
+    ``[p, theta, K (n), Lambda (n), rho, eps]`` (+ the off-diagonal K, n * n, if K is a matrix).
     """
 
     rho: float = 0.0

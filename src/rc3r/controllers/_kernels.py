@@ -61,7 +61,8 @@ def law_signals(code, cp, q, qd, ref, v, a, r, w):
             w[i] = cp[g + i] * (ref[0, i] - q[i]) + cp[g + n + i] * (ref[1, i] - qd[i])
     else:
         # sliding laws: e = q - q_d, v = qd_d - Lambda e, a = qdd_d - Lambda e_dot,
-        # r = qd - v = e_dot + Lambda e, w = -K r
+        # r = qd - v = e_dot + Lambda e, w = -K r (K diagonal, plus its off-diagonal part if packed;
+        # the scheduled -K_inertia M(q_d) r is the caller's: it needs the robot, :func:`inertia_gain`)
         for i in range(n):
             lam = cp[g + n + i]
             e = q[i] - ref[0, i]
@@ -70,6 +71,28 @@ def law_signals(code, cp, q, qd, ref, v, a, r, w):
             v[i] = ref[1, i] - lam * e
             a[i] = ref[2, i] - lam * ed
             w[i] = -cp[g + i] * r[i]
+        o = tail(code, cp, n)  # [K_inertia, has_matrix, off-diagonal K (n * n)]
+        if cp[o + 1] != 0.0:  # a matrix K: its off-diagonal part, row-major
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += cp[o + 2 + i * n + j] * r[j]
+                w[i] -= acc
+
+
+@njit(**_INLINE)
+def tail(code, cp, n):
+    """Index in ``cp`` of a sliding law's tail ``[K_inertia, has_matrix, ...]`` (after the law's own entries)."""
+    p = int(cp[0])
+    return 1 + p + 2 * n + (2 if code == ROBUST else 2 * p if code == ROBUST_COEFF else p)
+
+
+@njit(**_INLINE)
+def inertia_gain(code, cp, n):
+    """A sliding law's ``K_inertia`` b [1/s] (0 for FBL and PD): the caller subtracts ``b M(q_d) r`` from w."""
+    if code == FBL or code == PD:
+        return 0.0
+    return cp[tail(code, cp, n)]
 
 
 @njit(**_INLINE)

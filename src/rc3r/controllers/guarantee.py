@@ -82,7 +82,8 @@ def error_bound(law: Law, m_min: float, m_max: float, n: int) -> np.ndarray:
     Returns
     -------
     ndarray (n,)
-        :math:`\sqrt{(m_+/m_-)\,\mu/\lambda_{\min}(K)} / \Lambda_j`; valid when
+        :math:`\sqrt{(m_+/m_-)\,\mu/\lambda_{\min}(K)} / \Lambda_j` (with a scheduled K,
+        :math:`\lambda_{\min}(K) + b\,m_-`: ``law.k_min(m_min)``, m_min taken for the law's own M too); valid when
         :func:`covers` holds for the plant.
 
     Examples
@@ -97,6 +98,6 @@ def error_bound(law: Law, m_min: float, m_max: float, n: int) -> np.ndarray:
     if not (0 < m_min <= m_max and np.isfinite(m_max)):
         raise ValueError(f"need 0 < m_min <= m_max (finite), got {m_min}, {m_max}")
     mu = lyapunov_margin(law)
-    k_min = float(np.min(law.K))
+    k_min = law.k_min(m_min)  # K + K_inertia M(q_d) >= (lambda_min(K) + K_inertia m_min) I
     lam = np.broadcast_to(np.asarray(law.Lambda, dtype=float), (n,))
     return np.sqrt(m_max / m_min * mu / k_min) / lam

@@ -64,7 +64,10 @@ def design_markdown(result, command: str = "") -> str:
               f"T lambda <= {_real(d.delay):.4g}. Along the reference "
               f"L_Y = max lambda_max(M^-1 Y Y^T) = {d.L_Y:.4g} (rho L_Y / eps is a rate [1/s]), "
               f"L_K = max lambda_max(M^-1 K) = {d.L_K:.4g} 1/s, so:", "",
-              f"* velocity-loop bandwidth b = {d.bandwidth:.4g} 1/s (K_i = b / (M^-1(q_d(0)))_ii), "
+              f"* velocity-loop bandwidth b = {d.bandwidth:.4g} 1/s ("
+              + ("K(t) = b M(q_d(t)), scheduled on the reference: every mode of M^-1 K is b there"
+                 if d.scaling == "inertia" else "K = b M(q_d(0)), the full matrix"
+                 if d.scaling == "full" else "K_i = b / (M^-1(q_d(0)))_ii") + "), "
               f"Lambda = {d.Lambda:.4g} 1/s;",
               f"* stability boundary of the rule at {result.rate:g} Hz: eps = T rho L_Y / (c_d - T L_K) = "
               f"{d.eps_stable:.4g};",
@@ -132,7 +135,7 @@ def _real(d: int) -> float:
 
 def _vec(v) -> str:
     if isinstance(v, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+        return "[" + ", ".join(_vec(x) for x in v) + "]"
     return f"{v:.4g}"
 
 

@@ -31,7 +31,11 @@ of oscillation at ``rate / margin`` (period :math:`T' = mT`). It takes
 * :math:`\Lambda = \min(\mathrm{rate}/50, 50)` [1/s] and :math:`K_i = b\,\kappa_i` with
   :math:`\kappa_i = 1/(M^{-1}(q_d(0)))_{ii}` (the inertia joint i moves with the other joints free;
   ``scaling="diag"`` takes :math:`M_{ii}(q_d(0))`, :func:`rc3r.controllers.inertia_scaled_gain`) and
-  :math:`b = \min(2.5\Lambda,\; a_d / (4 T' L_\kappa))`: K may use a quarter of the budget;
+  :math:`b = \min(2.5\Lambda,\; a_d / (4 T' L_\kappa))`: K may use a quarter of the budget.
+  Where the diagonal's spread :math:`L_\kappa / b` holds b below :math:`\min(\mathrm{rate}/20, 125)`
+  (the inertia's coupling: the Kinova's 27.5, the Z1's 10.6), K is the full matrix
+  :math:`b\,M(q_d(0))` instead (``coupling``; Spong's proof holds for any constant positive
+  definite K), whose :math:`M^{-1}K` starts at :math:`b I`;
 * :math:`\epsilon = T'\rho L_Y / (a_d - T' L_K)` (eq. 7: one :math:`\epsilon_i` for every coefficient with
   :math:`\rho L_Y` replaced by :math:`\max_t\lambda_{\max}(M^{-1} Y\,\mathrm{diag}(\rho_i) Y^T)`);
 * the adaptive law's :math:`\Gamma`: Euler's update of :math:`\dot{\hat\theta} = -\Gamma Y^T r` with
@@ -105,6 +109,7 @@ class Spectrum:
     m_min, m_max : float
         Extreme eigenvalues of M over the samples [kg m^2].
     minv_diag_max : (n,) max over the samples of (M^-1)_jj [1/(kg m^2)]
+    M0 : (n, n) M(q_d(0)) [kg m^2], the unit of a coupled K (:func:`fast_design`'s ``coupling``)
     """
 
     t: np.ndarray
@@ -115,6 +120,7 @@ class Spectrum:
     m_min: float
     m_max: float
     minv_diag_max: np.ndarray
+    M0: np.ndarray | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -177,7 +183,7 @@ def spectrum(robot, trajectory, duration: float = 10.0, *, scaling: str = "free"
         dmax = np.maximum(dmax, np.sum(Li * Li, axis=0))  # (M^-1)_jj = sum_i Li_ij^2
     M0 = robot.mass_matrix(qd[0])
     kappa = 1.0 / np.diag(np.linalg.inv(M0)) if scaling == "free" else np.diag(M0).copy()
-    return Spectrum(t, np.array(Ls), np.array(Ys), kappa, scaling, float(lo), float(hi), dmax)
+    return Spectrum(t, np.array(Ls), np.array(Ys), kappa, scaling, float(lo), float(hi), dmax, M0.copy())
 
 
 @dataclass(frozen=True)
@@ -201,10 +207,13 @@ class Design:
     eps_stable: float
     kappa: np.ndarray
     scaling: str
+    K_inertia: float = 0.0
 
     def gains(self, law: str) -> dict:
         """The gains of ``law`` (a key of :data:`DESIGNED_LAWS`) as a config table (plain floats and lists)."""
-        sliding = {"K": [float(k) for k in self.K], "Lambda": float(self.Lambda)}
+        sliding = {"K": np.asarray(self.K, dtype=float).tolist(), "Lambda": float(self.Lambda)}
+        if self.K_inertia > 0.0:
+            sliding["K_inertia"] = float(self.K_inertia)
         if law == "robust":
             return {**sliding, "eps": float(self.eps)}
         if law == "robust-coeff":
@@ -236,16 +245,20 @@ def _check_rate(rate, margin) -> tuple[float, float]:
     return float(rate), float(margin)
 
 
-def eps_boundary(spec: Spectrum, rate: float, rho: float, K, delay: int = 0, rho_i=None) -> float:
-    """The smallest eps for which the rule's held loop at ``rate`` is stable (inf: K alone is unstable)."""
+def eps_boundary(spec: Spectrum, rate: float, rho: float, K, delay: int = 0, rho_i=None,
+                 K_inertia: float = 0.0) -> float:
+    """The smallest eps for which the rule's held loop at ``rate`` is stable (inf: K alone is unstable);
+    ``K_inertia`` b adds b to every mode of M^-1 K (the scheduled ``b M(q_d)`` on the spectrum's own M)."""
     T = 1.0 / float(rate)
-    room = stability_limit(delay) - T * spec.lam(np.broadcast_to(np.asarray(K, float), (spec.n,)))
+    K = np.asarray(K, float)
+    room = stability_limit(delay) - T * (spec.lam(K if K.ndim == 2 else np.broadcast_to(K, (spec.n,)))
+                                         + float(K_inertia))
     ly = float(rho) * spec.lam_yy() if rho_i is None else spec.lam_yy(rho_i)
     return math.inf if room <= 0 else T * ly / room
 
 
 def fast_design(spec: Spectrum, rate: float, *, rho: float, rho_i=None, delay: int = 0, margin: float = 1.0,
-                Lambda: float | None = None) -> Design:
+                Lambda: float | None = None, coupling: str = "inertia") -> Design:
     """The rule's fast form (module docstring): gains of every designed law at ``rate`` [Hz].
 
     Parameters
@@ -262,31 +275,44 @@ def fast_design(spec: Spectrum, rate: float, *, rho: float, rho_i=None, delay: i
         The design must stay free of oscillation at ``rate / margin`` (>= 1).
     Lambda : float, optional
         Error bandwidth [1/s] (default min(rate / 50, 50)).
+    coupling : {"inertia", "diag", "full", "auto"}
+        The sliding laws' K: ``"inertia"`` (the default) the scheduled ``K(t) = b M(q_d(t))``
+        (``K = 0``, ``K_inertia = b``: every mode of M^-1 K(t) is b on the reference, so neither M's
+        coupling nor its variation along the trajectory caps b); ``"diag"`` the constant ``b kappa``;
+        ``"full"`` the constant ``b M(q_d(0))``; ``"auto"`` the constant one of the two with the larger b.
     """
     rate, margin = _check_rate(rate, margin)
     d = _delay(delay)
+    if coupling not in ("inertia", "auto", "diag", "full"):
+        raise ParameterError(f"coupling must be 'inertia', 'auto', 'diag' or 'full', got {coupling!r}")
     Tm = margin / rate
     a = real_limit(d)
-    l_kappa = spec.lam(spec.kappa)
-    b = min(rate / B_FRACTION, B_MAX, K_SHARE * a / (Tm * l_kappa))
+    cap = min(rate / B_FRACTION, B_MAX)
+    l_diag = spec.lam(spec.kappa)
+    sched = coupling == "inertia"
+    full = spec.M0 is not None and (coupling == "full" or coupling == "auto" and spec.lam(spec.M0) < l_diag)
+    unit = np.zeros(spec.n) if sched else spec.M0 if full else spec.kappa
+    l_kappa = 1.0 if sched else spec.lam(unit) if full else l_diag  # max_t lambda_max(M^-1 unit)
+    b = min(cap, K_SHARE * a / (Tm * l_kappa))
     lam = float(Lambda) if Lambda is not None else min(b / B_OVER_LAMBDA, LAMBDA_MAX)
     if not (np.isfinite(lam) and lam > 0):
         raise ParameterError(f"Lambda must be finite and > 0, got {Lambda!r}")
-    K = b * spec.kappa
+    K = b * unit
     L_K = b * l_kappa
     room = a - Tm * L_K
     L_Y = spec.lam_yy()
     eps = Tm * float(rho) * L_Y / room
     eps_i = None if rho_i is None else Tm * spec.lam_yy(rho_i) / room
-    k_min = b * spec.lam_min(spec.kappa)
+    k_min = b if sched else b * spec.lam_min(unit)
     gamma = min(GAMMA_MAX, room * k_min / (Tm * L_Y)) if L_Y > 0 else GAMMA_MAX
     omega = min(lam, K_SHARE * a / (2.0 * Tm))  # FBL: T' Kd = 2 T' omega <= a/4 at most
     fbl = {"Kp": float(omega ** 2), "Kd": float(2.0 * omega)}
-    w_pd = min(lam, K_SHARE * a / (2.0 * Tm * l_kappa))
+    w_pd = min(lam, K_SHARE * a / (2.0 * Tm * l_diag))  # PD's gains stay diagonal
     pd = {"Kp": (w_pd ** 2 * spec.kappa).tolist(), "Kd": (2.0 * w_pd * spec.kappa).tolist()}
     return Design(rate, d, margin, lam, float(b), K, float(eps), None if eps_i is None else float(eps_i),
                   float(gamma), fbl, pd, float(rho), L_Y, float(L_K),
-                  eps_boundary(spec, rate, rho, K, d), spec.kappa.copy(), spec.scaling)
+                  eps_boundary(spec, rate, rho, K, d, K_inertia=b if sched else 0.0), np.array(unit, dtype=float),
+                  "inertia" if sched else "full" if full else spec.scaling, float(b) if sched else 0.0)
 
 
 def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0) -> float:
@@ -301,10 +327,11 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
     Tm, a, n = margin / rate, real_limit(delay), spec.n
 
     def vec(x):
-        return np.broadcast_to(np.asarray(x, dtype=float), (n,))
+        x = np.asarray(x, dtype=float)
+        return x if x.ndim == 2 else np.broadcast_to(x, (n,))
 
     if isinstance(law, (Robust, RobustPerCoefficient, Adaptive)):
-        L_K = spec.lam(vec(law.K))
+        L_K = spec.lam(vec(law.K)) + law.K_inertia  # the scheduled b M(q_d) on the spectrum's M: + b
         lam = float(np.max(law.Lambda))
         if isinstance(law, Robust):
             fig = Tm * (L_K + law.rho / law.eps * spec.lam_yy())
@@ -312,7 +339,7 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
             fig = Tm * (L_K + spec.lam_yy(np.asarray(law.rho_i) / np.asarray(law.eps_i)))
         else:
             gmax = float(np.max(law.Gamma))
-            fig = Tm * (L_K + gmax * spec.lam_yy() / max(spec.lam_min(vec(law.K)), 1e-300))
+            fig = Tm * (L_K + gmax * spec.lam_yy() / max(spec.lam_min(vec(law.K)) + law.K_inertia, 1e-300))
         return max(fig, Tm * lam) / a
     if isinstance(law, FeedbackLinearization):  # e'' + Kd e' + Kp e = 0, per joint: its fastest pole
         kp, kd = vec(law.Kp), vec(law.Kd)

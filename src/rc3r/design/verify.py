@@ -305,7 +305,7 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
                                  "minv_diag_max": sp.minv_diag_max.tolist()},
                        effort_limit=_effort(spec.robot_model))
     run = _Runner(cfg, table, duration, workers, scheduler, progress)
-    sliding = {"K": design.gains("robust")["K"], "Lambda": design.Lambda}
+    sliding = {k: v for k, v in design.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
     low = rate / margin
 
     def level(eps):
@@ -346,7 +346,7 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     fbl = run.run(run.jobs("fbl", design.gains("fbl"), None, rate, plants), "fbl baseline")
     res.baselines["fbl"] = summarize(fbl)
     if design.eps_i is not None:
-        sl = {"K": sliding["K"], "Lambda": sliding["Lambda"]}
+        sl = dict(sliding)
         tried = [design.eps_i * factor] + ([design.eps_i] if factor != 1.0 else [])
         for eps_i in tried:  # verified like eq. 6: every plant at the rate and at rate / margin
             jobs = run.jobs("robust-coeff", sl, eps_i, rate, plants) + \

@@ -99,7 +99,9 @@ def check_exportable(law, trajectory) -> None:
 
 
 def _law_parts(law, n: int) -> tuple[str, str, str]:
-    """(constants, signals body, output body) of the law in C, from its packed vector ``law.pack(n)``."""
+    """(constants, signals body, output body, coupling, schedule) of the law in C, from its packed vector
+    ``law.pack(n)`` (coupling: the off-diagonal part of a matrix K, after the per-joint loop; schedule: the
+    ``-K_inertia M(q_d) r`` of a scheduled K, before the regressor's evaluation; empty otherwise)."""
     cp = np.asarray(law.pack(n), dtype=float)
     p = law.p
     g = 1 + p
@@ -120,6 +122,36 @@ def _law_parts(law, n: int) -> tuple[str, str, str]:
                    f"static const double rc3r_eps_i[RC3R_P] = {c_array(cp[s + p:s + 2 * p])};"]
     elif code == K.ADAPTIVE:
         consts += [f"static const double rc3r_Gamma[RC3R_P] = {c_array(cp[s:s + p])};"]
+    coupling = schedule = ""
+    o = s + {K.ROBUST: 2, K.ROBUST_COEFF: 2 * p, K.ADAPTIVE: p}.get(code, 0)  # the tail: [b, has_matrix, Kc]
+    if code not in (K.FBL, K.PD) and cp[o] > 0.0:  # K(t) = K + b M(q_d): M(q_d) r through the regressor
+        consts += [f"static const double rc3r_K_inertia = {c_double(cp[o])};  /* b [1/s] */",
+                   f"static const double rc3r_theta_K[RC3R_P] = {c_array(cp[1:1 + p])};  /* M's theta */"]
+        schedule = """    {  /* scheduled K: w -= b (Y(q_d, 0, 0, r) - Y(q_d, 0, 0, 0)) theta = b M(q_d) r */
+        double zero[RC3R_N], m1[RC3R_N], m0[RC3R_N];
+        int i;
+        for (i = 0; i < RC3R_N; ++i)
+            zero[i] = 0.0;
+        rc3r_regressor_eval(&wk, ref[0], zero, zero, r);
+        rc3r_regressor_apply(&wk, rc3r_theta_K, zero, m1);
+        rc3r_regressor_eval(&wk, ref[0], zero, zero, zero);
+        rc3r_regressor_apply(&wk, rc3r_theta_K, zero, m0);
+        for (i = 0; i < RC3R_N; ++i)
+            w[i] -= rc3r_K_inertia * (m1[i] - m0[i]);
+    }
+"""
+    if code not in (K.FBL, K.PD) and cp[o + 1] != 0.0:  # a matrix K: w -= K_offdiag r
+        o += 2
+        rows = ", ".join(c_array(row) for row in cp[o:o + n * n].reshape(n, n))
+        consts += [f"static const double rc3r_Kc[RC3R_N][RC3R_N] = {{{rows}}};  /* K's off-diagonal part */"]
+        coupling = """    for (i = 0; i < RC3R_N; ++i) {  /* a matrix K: its off-diagonal part */
+        double acc = 0.0;
+        int j;
+        for (j = 0; j < RC3R_N; ++j)
+            acc += rc3r_Kc[i][j] * r[j];
+        w[i] -= acc;
+    }
+"""
     z0 = np.asarray(law.initial_state(), dtype=float)
     if z0.size:
         consts += [f"static const double rc3r_z0[RC3R_NZ] = {c_array(z0)};  /* theta_0: the initial estimate */"]
@@ -174,7 +206,7 @@ def _law_parts(law, n: int) -> tuple[str, str, str]:
         th[j] = z[j];
     }"""
         output = head + body + "\n    return nrm;"
-    return "\n".join(consts), signals, output
+    return "\n".join(consts), signals, output, coupling, schedule
 
 
 def _reference_source(trajectory) -> str:
@@ -311,7 +343,7 @@ static void rc3r_law_signals(const double *q, const double *qd, double ref[3][RC
     for (i = 0; i < RC3R_N; ++i) {
 @SIGNALS@
     }
-}
+@COUPLING@}
 
 /* theta_eff into th (RC3R_P), the state's rate into zdot; returns ||Y^T r|| */
 static double rc3r_law_output(const rc3r_regressor *wk, const double *r, const double *z,
@@ -328,7 +360,7 @@ static double rc3r_torque(double t, const double *q, const double *qd, const dou
     rc3r_regressor wk;
     rc3r_reference(t, ref);
     rc3r_law_signals(q, qd, ref, v, a, r, w);
-    rc3r_regressor_eval(&wk, q, qd, v, a);
+@SCHEDULE@    rc3r_regressor_eval(&wk, q, qd, v, a);
     diag = rc3r_law_output(&wk, r, z, th, zdot);
     rc3r_regressor_apply(&wk, th, w, u);
     return diag;
@@ -410,7 +442,7 @@ def controller_sources(ctrl, title: str) -> tuple[str, str]:
     law, model, traj = ctrl.law, ctrl.model, ctrl.trajectory
     check_exportable(law, traj)
     n, p = model.n, law.p
-    consts, signals, output = _law_parts(law, n)
+    consts, signals, output, coupling, schedule = _law_parts(law, n)
     sampled = ctrl.rate is not None
     title = " ".join(str(title).replace("*/", "* /").split())
     fields = {"@TITLE@": title, "@N@": str(n), "@P@": str(p), "@NZ@": str(law.initial_state().size),
@@ -420,7 +452,7 @@ def controller_sources(ctrl, title: str) -> tuple[str, str]:
     for key, value in fields.items():
         header = header.replace(key, value)
     parts = {"@TITLE@": title, "@REFERENCE@": _reference_source(traj), "@REGRESSOR@": regressor_source(model).strip(),
-             "@LAW@": law.name, "@CONSTANTS@": consts, "@SIGNALS@": signals, "@OUTPUT@": output,
+             "@LAW@": law.name, "@CONSTANTS@": consts, "@SIGNALS@": signals, "@COUPLING@": coupling, "@SCHEDULE@": schedule, "@OUTPUT@": output,
              "@PERIOD@": c_double(1.0 / ctrl.rate) if sampled else "0.0"}
     source = _SOURCE
     for key, value in parts.items():

@@ -88,7 +88,7 @@ def run_metrics(res, seed=None, tolerance=None) -> dict:
         "theta_model": _tolist(c.get("theta", [])),
         "rho": c.get("rho", c.get("rho_i")),
         "eps": c.get("eps", c.get("eps_i")),
-        "gains": {k: c[k] for k in ("Kp", "Kd", "K", "Lambda", "Gamma") if k in c},
+        "gains": {k: c[k] for k in ("Kp", "Kd", "K", "Lambda", "K_inertia", "Gamma") if k in c},
         "max_abs_error": _tolist(np.abs(e).max(axis=0)) if e.size else nan,
         "rms_error": _tolist(np.sqrt((e ** 2).mean(axis=0))) if e.size else nan,
         "final_error_bound": _tolist(np.abs(e[late]).max(axis=0)) if late.any() else nan,

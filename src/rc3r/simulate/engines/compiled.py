@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rc3r.controllers._kernels import law_signals, law_theta, uses_xi
+from rc3r.controllers._kernels import inertia_gain, law_signals, law_theta, uses_xi
 from rc3r.plants._kernels import actuate, apply_effects, measure
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
@@ -50,8 +50,22 @@ _JIT = dict(cache=True, nogil=True, error_model="numpy")
 def control(law, cp, q, qd, z, ref, kc, wk, u, zdot, Y, th_eff, v, a, r, w):
     """u (n,) and zdot of a registered law (code ``law``) on the supply's regressor; returns ||Y^T r||.
 
-    ``u = w + Y th_eff`` and ``xi = Y^T r`` through the supply's contractions (``Y`` is scratch)."""
+    ``u = w + Y th_eff`` and ``xi = Y^T r`` through the supply's contractions (``Y`` is scratch).
+    ``ref`` (6, n): rows q_d, qd_d, qdd_d, then scratch for a scheduled K (``K_inertia`` b > 0:
+    ``w -= b M(q_d) r`` with ``M(q_d) r = Y(q_d, 0, 0, r) theta - Y(q_d, 0, 0, 0) theta``, the law's theta)."""
     law_signals(law, cp, q, qd, ref, v, a, r, w)
+    b = inertia_gain(law, cp, q.shape[0])
+    if b > 0.0:
+        n = q.shape[0]
+        zero, m1, m0 = ref[3], ref[4], ref[5]
+        th0 = cp[1:1 + int(cp[0])]
+        zero[:] = 0.0
+        _passes(kc, ref[0], zero, zero, r, Y, wk)
+        _apply(kc, Y, th0, zero, m1, wk)
+        _passes(kc, ref[0], zero, zero, zero, Y, wk)
+        _apply(kc, Y, th0, zero, m0, wk)
+        for i in range(n):
+            w[i] -= b * (m1[i] - m0[i])
     _passes(kc, q, qd, v, a, Y, wk)
     if uses_xi(law):
         _xi(kc, Y, r, th_eff, wk)
@@ -192,7 +206,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     p = int(cp[0])
     wk = _make_work(kc)
     fric = _friction(fx, nj)
-    u = np.empty(nj); ref = np.empty((3, nj)); Y = np.empty((nj, p)); xi = np.empty(p)
+    u = np.empty(nj); ref = np.empty((6, nj)); Y = np.empty((nj, p)); xi = np.empty(p)
     v = np.empty(nj); a = np.empty(nj); r = np.empty(nj); w = np.empty(nj)
     ys = np.empty(1); u0 = np.empty(nj)
     nrhs = 0; nsteps = 0; nrej = 0
@@ -340,7 +354,7 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     x = x0.copy()
     zdot = np.zeros(max(n - n2, 0))
     u = np.empty(nj); uprev = np.empty(nj)
-    ref = np.empty((3, nj)); Y = np.empty((nj, p)); xi = np.empty(p)
+    ref = np.empty((6, nj)); Y = np.empty((nj, p)); xi = np.empty(p)
     v = np.empty(nj); a = np.empty(nj); r = np.empty(nj); w = np.empty(nj)
     k1 = np.empty(n2); k2 = np.empty(n2); k3 = np.empty(n2); k4 = np.empty(n2); xs = np.empty(n2)
     qm = np.empty(nj); qdm = np.empty(nj); ua = np.empty(nj); tau = np.empty(nj)
@@ -402,7 +416,7 @@ def closed_loop_xdot(t, x, kc, fx, law, cp, tp, n):
     wk = _make_work(kc)
     fric = _friction(fx, n)
     xdot = np.empty(x.shape[0])
-    u = np.empty(n); ref = np.empty((3, n)); Y = np.empty((n, p)); xi = np.empty(p)
+    u = np.empty(n); ref = np.empty((6, n)); Y = np.empty((n, p)); xi = np.empty(p)
     v = np.empty(n); a = np.empty(n); r = np.empty(n); w = np.empty(n); ys = np.empty(1)
     if not closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys):
         xdot[:] = np.nan
