@@ -132,10 +132,31 @@ def test_default_ur5_robust_at_1khz_is_clean_where_the_old_defaults_diverged():
     res, m = rc3r.execute(new)
     assert res.ok and m["verdict"] == "clean", m["verdict"]
     assert "sampled-data rule" in new.model["gains_source"]
-    assert new.law.eps > 0.5 and new.law.K[-1] < 1.0  # the wrist (M_66 ~ 0.017 kg m^2) gets its own K
+    assert new.law.eps > 0.5 and new.law.K_inertia == pytest.approx(50.0)  # K(t) = (rate / 20) M(q_d(t))
     # the rule rejects the old gains and accepts its own (the check the hook applies)
     sp = spectrum(new.robot_model, new.trajectory, 1.5)
     assert check(old.law, sp, 1000.0) > 1.0 >= check(new.law, sp, 1000.0) - 1e-12
+
+
+@pytest.mark.parametrize("rate", [500.0, 1000.0])
+def test_default_robust_on_the_xarm7_with_a_payload_is_clean(rate):
+    """The xArm7 of example-robot-data (a 1.4e-4 kg m^2 wrist), unknown 0..3 kg payload (plant 3 kg), eq. 6
+    with no gain given, 3 s: clean at 500 Hz and 1 kHz. With the fast form's eps for margin 1 (the
+    defaults before 2026-12-02) it diverged within 0.12 s at both rates; the defaults now take rc3r
+    design's margin 2, whose eps is about twice as thick."""
+    from rc3r.design.rule import DEFAULT_MARGIN
+    from rc3r.robots.pinocchio import example_robot_data_dir
+
+    urdf = example_robot_data_dir() / "xarm_description/urdf/xarm7.urdf"
+    kw = dict(urdf=str(urdf), controller="robust", perturbed=True, payload=(0.0, 3.0), rate=rate, duration=3.0)
+    spec = rc3r.build_run(**kw)
+    res, m = rc3r.execute(spec)
+    assert DEFAULT_MARGIN == 2.0 and "sampled-data rule" in spec.model["gains_source"]
+    assert res.ok and m["verdict"] == "clean", m["verdict"]
+    thin = rc3r.build_run(**kw, config={"gains": {"robust": dict(sampled_gains(
+        "robust", spec.robot_model, spec.trajectory, spec.model, rate, duration=3.0, margin=1.0)[0])}})
+    assert thin.law.eps < 0.7 * spec.law.eps
+    assert rc3r.execute(thin)[1]["verdict"] == "diverged"
 
 
 def test_given_gains_and_continuous_runs_are_left_alone():

@@ -3,7 +3,7 @@
 Writes into ``--out`` (as a whole, :mod:`rc3r.cli._output`): ``design.toml`` (a configuration for
 ``rc3r run --config`` and ``rc3r montecarlo --config``), ``design.md``, ``design.json``,
 ``design.png`` and ``runs.csv`` (every verification run, the rows of ``rc3r montecarlo``).
-Exit 0 when a clean eps was found at the rate and at rate / margin on every plant, 1 when none was
+Exit 0 when a robust law (eq. 6 or eq. 7) was clean at the rate and at rate / margin on every plant, 1 when none was
 (the files are written with the fast form's gains and say so), 2 on bad input (nothing written).
 """
 from __future__ import annotations

@@ -72,6 +72,8 @@ LAMBDA_MAX = 50.0
 B_MAX = B_OVER_LAMBDA * LAMBDA_MAX
 #: Share of the sampled-data budget a_d that K (or PD's Kd) may use.
 K_SHARE = 0.25
+#: The margin of the defaults of sampled runs (:func:`sampled_gains`), ``rc3r design --margin``'s default.
+DEFAULT_MARGIN = 2.0
 #: The adaptive law's gain is never above the default's.
 GAMMA_MAX = 10.0
 
@@ -356,11 +358,13 @@ _CACHE: dict = {}
 
 
 def sampled_gains(kind: str, robot, trajectory, model: dict, rate: float, *, delay: int = 0,
-                  duration: float = 10.0, margin: float = 1.0):
+                  duration: float = 10.0, margin: float = DEFAULT_MARGIN):
     """The gains of ``kind`` for a sampled run without user gains (:func:`rc3r.study.build_run`'s hook).
 
     Returns ``(gains, note)``: the law's defaults (``gains = {}``) when :func:`check` passes them at
-    ``rate / margin``, else the fast form's gains; ``note`` says which. ``(None, None)`` for a law the
+    ``rate / margin``, else the fast form's gains for that margin (by default ``rc3r design``'s, 2:
+    with margin 1 the unverified eps of eq. 6 diverged on the xArm7 with a 0-3 kg payload at 500 Hz
+    and 1 kHz, docs/design.md); ``note`` says which. ``(None, None)`` for a law the
     rule does not design.
     """
     from ..controllers import make_law
