@@ -86,8 +86,8 @@ def _is_matrix(x) -> bool:
 
 def _gain_matrix(name, x) -> np.ndarray:
     """A sliding law's ``K``: a number or a vector > 0 (diagonal), or a symmetric positive definite (n, n)
-    matrix (Spong's proof holds for any constant positive definite K; :mod:`rc3r.design` uses
-    ``K = b M(q_d(0))`` where a diagonal K would be limited by the inertia's coupling)."""
+    matrix (Spong's proof holds for any constant positive definite K; the design rule's
+    ``coupling = "full"`` makes ``K = b M(q_d(0))``)."""
     if _is_matrix(x):
         try:
             arr = np.array(x, dtype=float)
@@ -276,10 +276,10 @@ class _Sliding(Law):
     r"""Laws on r = e_dot + Lambda e: ``K`` [N m s/rad] (a number or a vector > 0: diagonal; or a symmetric
     positive definite (n, n) matrix), ``Lambda`` [1/s] (diagonal, > 0) and ``K_inertia`` b [1/s] (>= 0):
 
-    .. math:: w = -igl(K + b\,M_{	heta}(q_d(t))igr)\, r,
+    .. math:: w = -\bigl(K + b\,M_{\theta}(q_d(t))\bigr)\, r,
 
     ``M_theta`` the mass matrix of the law's own theta at the reference (computed through the regressor:
-    :math:`M r = Y(q_d, 0, 0, r)	heta - Y(q_d, 0, 0, 0)	heta`). Spong's proof needs only
+    :math:`M r = Y(q_d, 0, 0, r)\theta - Y(q_d, 0, 0, 0)\theta`). Spong's proof needs only
     :math:`K(t) \succeq k I` uniformly, which a positive definite M gives (K = 0 is allowed with b > 0);
     the scheduled part keeps every mode of :math:`M^{-1}K(t)` near b along the reference, where a constant
     K spreads them by M's variation (docs/design.md). The packed vector ends with
@@ -327,7 +327,7 @@ class Robust(_Sliding):
 
     Inside the boundary layer ``||Y^T r|| <= eps`` the law is the high gain
     ``(rho / eps) Y Y^T``: stiff (docs/control.md). Layout of :meth:`pack`:
-    ``[p, theta, K (n), Lambda (n), rho, eps]`` (+ the off-diagonal K, n * n, if K is a matrix).
+    ``[p, theta, K (n), Lambda (n), rho, eps]`` and the sliding laws' tail (:class:`_Sliding`).
     """
 
     rho: float = 0.0
@@ -355,7 +355,7 @@ def _scalar(name, arr) -> float:
 class RobustPerCoefficient(_Sliding):
     """Eq. (7): per-coefficient bounds ``rho_i`` (p,) and boundary layers ``eps_i``.
 
-    Layout of :meth:`pack`: ``[p, theta, K (n), Lambda (n), rho_i (p), eps_i (p)]``.
+    Layout of :meth:`pack`: ``[p, theta, K (n), Lambda (n), rho_i (p), eps_i (p)]`` and the sliding laws' tail.
     """
 
     rho_i: float | np.ndarray = 0.0
@@ -377,7 +377,7 @@ class RobustPerCoefficient(_Sliding):
 class Adaptive(_Sliding):
     """Slotine--Li adaptive law; ``theta`` is the initial estimate, ``Gamma`` the adaptation gain.
 
-    Layout of :meth:`pack`: ``[p, theta, K (n), Lambda (n), Gamma (p)]``.
+    Layout of :meth:`pack`: ``[p, theta, K (n), Lambda (n), Gamma (p)]`` and the sliding laws' tail.
     """
 
     Gamma: float | np.ndarray = 10.0
