@@ -28,14 +28,17 @@ controller's model), :math:`\lambda_{\max}(M^{-1}G) \le \lambda_{\max}(M^{-1}K) 
 **The fast form** (:func:`fast_design`, no simulation) asks for more: the loop must still be free
 of oscillation at ``rate / margin`` (period :math:`T' = mT`). It takes
 
-* :math:`\Lambda = \min(\mathrm{rate}/50, 50)` [1/s] and :math:`K_i = b\,\kappa_i` with
+* the scheduled K (``coupling="inertia"``, the default): :math:`K(t) = b\,M(q_d(t))` (the law's
+  ``K_inertia`` = b, its constant K = 0): on the reference every mode of :math:`M^{-1}K(t)` is b, so
+  :math:`L_K = b` and :math:`b = \min(\mathrm{rate}/20,\; 125,\; a_d / (4 T'))`: K may use a quarter of
+  the budget; :math:`\Lambda = \min(b / 2.5, 50)` [1/s]. Spong's proof needs only a uniformly positive
+  definite K(t);
+* or a constant K (``coupling="diag"``): :math:`K_i = b\,\kappa_i` with
   :math:`\kappa_i = 1/(M^{-1}(q_d(0)))_{ii}` (the inertia joint i moves with the other joints free;
   ``scaling="diag"`` takes :math:`M_{ii}(q_d(0))`, :func:`rc3r.controllers.inertia_scaled_gain`) and
-  :math:`b = \min(2.5\Lambda,\; a_d / (4 T' L_\kappa))`: K may use a quarter of the budget.
-  Where the diagonal's spread :math:`L_\kappa / b` holds b below :math:`\min(\mathrm{rate}/20, 125)`
-  (the inertia's coupling: the Kinova's 27.5, the Z1's 10.6), K is the full matrix
-  :math:`b\,M(q_d(0))` instead (``coupling``; Spong's proof holds for any constant positive
-  definite K), whose :math:`M^{-1}K` starts at :math:`b I`;
+  :math:`b = \min(\mathrm{rate}/20,\; 125,\; a_d / (4 T' L_\kappa))`, whose spread
+  :math:`L_\kappa / b` (M's coupling and its variation along the reference: the Kinova's 22.8) holds b
+  down; ``"full"`` takes the constant :math:`b\,M(q_d(0))`, ``"auto"`` the constant one with the larger b;
 * :math:`\epsilon = T'\rho L_Y / (a_d - T' L_K)` (eq. 7: one :math:`\epsilon_i` for every coefficient with
   :math:`\rho L_Y` replaced by :math:`\max_t\lambda_{\max}(M^{-1} Y\,\mathrm{diag}(\rho_i) Y^T)`);
 * the adaptive law's :math:`\Gamma`: Euler's update of :math:`\dot{\hat\theta} = -\Gamma Y^T r` with
