@@ -9,7 +9,7 @@ For each arm and each rate it runs (as subprocesses, so each has its own process
 
 where LAW is the robust law the design recommends (``recommendation`` in design.json: eq. 6
 ``robust`` or eq. 7 ``robust-coeff``, whichever was clean on every plant with the smaller worst
-error; ``robust`` if neither),
+error; ``robust`` if neither), or the one ``--mc-law`` names,
 
 and writes ``OUT/design_table.md`` (one row per arm and rate) and ``OUT/design_table.json`` (every
 number, the commands, the seed). ``--effects`` adds ``--friction urdf --torque-limit urdf`` to both
@@ -110,7 +110,7 @@ def one(arm: str, rate: float, args, base: Path) -> dict:
     row.update(_design_fields(info))
     limit = info.get("effort_limit")
     # the robust law the design recommends (eq. 6 or eq. 7, design.json), or eq. 6 if it recommends none
-    law = (info.get("recommendation") or {}).get("law") or "robust"
+    law = args.mc_law if args.mc_law != "recommended" else (info.get("recommendation") or {}).get("law") or "robust"
     mc_cmd = _rc3r() + ["montecarlo", "--config", str(info_path.with_name("design.toml")),
                         "--controllers", f"{law},fbl"] + effects + common + ["--out", str(where / "mc")]
     rc_m, wall_m = _run(mc_cmd, where / "mc.log")
@@ -208,6 +208,8 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, default=1, help="worker processes of each command (default 1)")
     p.add_argument("--seed", type=int, default=0, help="seed of the design's and the montecarlo's plants")
     p.add_argument("--effects", action="store_true", help="add --friction urdf --torque-limit urdf")
+    p.add_argument("--mc-law", default="recommended", choices=("recommended", "robust", "robust-coeff"),
+                   help="the robust law of the montecarlo (default: the one the design recommends)")
     p.add_argument("--merge", nargs="+", metavar="DIR",
                    help="write one table of the rows of these earlier --out directories into --out, and stop")
     args = p.parse_args(argv)
