@@ -140,9 +140,9 @@ def _design_fields(info: dict) -> dict:
 
 
 def _krange(K, b=None) -> str:
-    """``min..max`` of K's diagonal, ``(full)`` if K is a matrix; ``b M(q_d)`` for a scheduled K."""
+    """``min..max`` of K's diagonal, ``(full)`` if K is a matrix; ``b M(q)`` for a scheduled K."""
     if b:
-        return f"{b:.3g} M(q_d)"
+        return f"{b:.3g} M(q)"
     k = np.asarray(K, dtype=float)
     d = np.diag(k) if k.ndim == 2 else k
     return f"{d.min():.3g}..{d.max():.3g}" + (" (full)" if k.ndim == 2 else "")

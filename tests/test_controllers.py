@@ -454,9 +454,9 @@ def test_a_matrix_k_gives_w_equal_minus_k_r(name, rng):
 
 
 @pytest.mark.parametrize("K", [0.0, 5.0], ids=["scheduled-only", "plus-diagonal"])
-def test_a_scheduled_k_subtracts_b_m_of_the_reference_times_r(K, rng):
-    """``K_inertia`` b: w = -(K + b M(q_d)) r with M from pin.crba at q_d (the law's theta is the UR5's own,
-    so its mass matrix is Pinocchio's): the torque equals Y theta_eff - (K + b M(q_d)) r to 1e-10 relative;
+def test_a_scheduled_k_subtracts_b_m_of_q_times_r(K, rng):
+    """``K_inertia`` b: w = -(K + b M(q)) r with M from pin.crba at the measured q (the law's theta is the
+    UR5's own, so its mass matrix is Pinocchio's): the torque equals Y theta_eff - (K + b M(q)) r to 1e-10 relative;
     K = 0 is allowed with b > 0 (b M is positive definite), K < 0 is not; k_min adds b m_min."""
     import pinocchio as pin
 
@@ -475,7 +475,7 @@ def test_a_scheduled_k_subtracts_b_m_of_the_reference_times_r(K, rng):
         r = ed + 10.0 * e
         Y = arm.regressor_pinocchio(q, qd, ref[1] - 10.0 * e, ref[2] - 10.0 * ed)
         xi = Y.T @ r
-        M = pin.crba(arm.model, data, ref[0])
+        M = pin.crba(arm.model, data, q)
         M = np.triu(M) + np.triu(M, 1).T
         want = Y @ (th - 3.0 * xi / max(np.linalg.norm(xi), 5.0)) - K * r - 25.0 * M @ r
         assert np.abs(u - want).max() <= 1e-10 * np.abs(want).max()

@@ -132,7 +132,7 @@ def test_default_ur5_robust_at_1khz_is_clean_where_the_old_defaults_diverged():
     res, m = rc3r.execute(new)
     assert res.ok and m["verdict"] == "clean", m["verdict"]
     assert "sampled-data rule" in new.model["gains_source"]
-    assert new.law.eps > 0.5 and new.law.K_inertia == pytest.approx(50.0)  # K(t) = (rate / 20) M(q_d(t))
+    assert new.law.eps > 0.5 and new.law.K_inertia == pytest.approx(50.0)  # K(q) = (rate / 20) M(q)
     # the rule rejects the old gains and accepts its own (the check the hook applies)
     sp = spectrum(new.robot_model, new.trajectory, 1.5)
     assert check(old.law, sp, 1000.0) > 1.0 >= check(new.law, sp, 1000.0) - 1e-12
@@ -345,7 +345,7 @@ def test_eq7_counts_only_if_clean_at_the_margin_rate_too():
 
 
 def test_scheduled_k_lifts_the_bandwidth_a_constant_k_caps():
-    """The rule's default K(t) = b M(q_d(t)) keeps every mode of M^-1 K at b on the reference, so b reaches
+    """The rule's default K(q) = b M(q) puts every mode of the model's M^-1 K at b, so b reaches
     its cap min(rate / 20, 125) = 25 at 500 Hz on the Kinova, where a constant diagonal K (spread 27.5 and
     M's variation along the reference) holds b below 5 and the constant full ``b M(q_d(0))`` too; the full
     K equals b times pin.crba at q_d(0) (symmetrized; 1e-12 relative); ``auto`` takes the constant one

@@ -258,9 +258,10 @@ def test_is_cached_looks_only_at_the_integrator_the_run_needs(tmp_path, monkeypa
 
 @pytest.mark.parametrize("law", ["robust", "adaptive"])
 def test_scheduled_k_compiled_equals_python(law):
-    """The scheduled K(t) = b M(q_d(t)) (``K_inertia``, rc3r design's default) on the UR5 with a 0..5 kg
-    payload (plant at 5 kg) at 1 kHz for 1 s: the compiled engine (M(q_d) r from two O(n) passes of the
-    chain's supply) equals the python engine (two Pinocchio regressors) to 1e-8 rad and 1e-6 N m."""
+    """The scheduled K(q) = b M(q) (``K_inertia``, rc3r design's default) on the UR5 with a 0..5 kg
+    payload (plant at 5 kg) at 1 kHz for 1 s: the compiled engine (M(q) r from one acceleration pass on
+    the kinematics of the chain supply's regressor pass) equals the python engine (two Pinocchio-path
+    regressors) to 1e-8 rad and 1e-6 N m."""
     gains = {"robust": {"K": 0.0, "K_inertia": 25.0, "Lambda": 10.0, "eps": 5.0},
              "adaptive": {"K": 0.5, "K_inertia": 25.0, "Lambda": 10.0, "Gamma": 1.0}}
     kw = dict(perturbed=True, payload=(0.0, 5.0), payload_com=(0, 0, 0.1))

@@ -55,7 +55,7 @@ def _toml(table: dict, prefix: str = "") -> str:
 def _config(robot: str) -> dict:
     """A 1 kHz design for each arm: the UR5 with a payload of 0..3 kg unknown to the controller
     (inertia-scaled K, docs/generic.md), the 3R perturbed with eps = 50 (clean at 1 kHz)."""
-    if robot == "ur5-sched":  # K(t) = 25 M(q_d(t)) (rc3r design's default)
+    if robot == "ur5-sched":  # K(q) = 25 M(q) (rc3r design's default)
         cfg = _config("ur5")
         cfg["gains"]["robust"] = {"K": 0.0, "K_inertia": 25.0, "Lambda": 10.0, "eps": 5.0}
         return cfg

@@ -146,7 +146,7 @@ def cmd_design(args) -> int:
     kk = np.asarray(g["K"], dtype=float)
     ks = ", ".join(format(k, ".3g") for k in (np.diag(kk) if kk.ndim == 2 else kk)) + \
         ("; diagonal of b M(q_d(0))" if kk.ndim == 2 else "") + \
-        (f"] + {g['K_inertia']:.4g} M(q_d(t)) [scheduled" if g.get("K_inertia") else "")
+        (f"] + {g['K_inertia']:.4g} M(q) [scheduled" if g.get("K_inertia") else "")
     print(f"{word}: eps = {g['eps']:.4g} (rule: {res.design.eps:.4g}, stability boundary {res.design.eps_stable:.4g}), "
           f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad (FBL {num(fbl)}); lowest clean "
           f"rate {num(low, '.4g')} Hz; {len(res.levels)} eps tried, wall {wall:.1f} s -> {out}/")

@@ -200,9 +200,9 @@ class Law:
             raise ParameterError(f"law {self.name!r} has {self.p} coefficients, the robot's regressor "
                                  f"is {Y.shape}")
         b = float(getattr(self, "K_inertia", 0.0))
-        if b > 0.0:  # K(t) = K + b M(q_d): M(q_d) r = Y(q_d, 0, 0, r) theta - Y(q_d, 0, 0, 0) theta (the law's theta)
-            qr, zero = np.asarray(ref[0], dtype=float), np.zeros(q.size)
-            w = w - b * ((robot.regressor(qr, zero, zero, r) - robot.regressor(qr, zero, zero, zero)) @ self.theta)
+        if b > 0.0:  # K(q) = K + b M(q): M(q) r = Y(q, 0, 0, r) theta - Y(q, 0, 0, 0) theta (the law's theta)
+            zero = np.zeros(q.size)
+            w = w - b * ((robot.regressor(q, zero, zero, r) - robot.regressor(q, zero, zero, zero)) @ self.theta)
         th_eff, zdot, diag = self.output(Y, r, z)
         return Y @ th_eff + w, zdot, diag
 
@@ -276,13 +276,14 @@ class _Sliding(Law):
     r"""Laws on r = e_dot + Lambda e: ``K`` [N m s/rad] (a number or a vector > 0: diagonal; or a symmetric
     positive definite (n, n) matrix), ``Lambda`` [1/s] (diagonal, > 0) and ``K_inertia`` b [1/s] (>= 0):
 
-    .. math:: w = -\bigl(K + b\,M_{\theta}(q_d(t))\bigr)\, r,
+    .. math:: w = -\bigl(K + b\,M_{\theta}(q)\bigr)\, r,
 
-    ``M_theta`` the mass matrix of the law's own theta at the reference (computed through the regressor:
-    :math:`M r = Y(q_d, 0, 0, r)\theta - Y(q_d, 0, 0, 0)\theta`). Spong's proof needs only
-    :math:`K(t) \succeq k I` uniformly, which a positive definite M gives (K = 0 is allowed with b > 0);
-    the scheduled part keeps every mode of :math:`M^{-1}K(t)` near b along the reference, where a constant
-    K spreads them by M's variation (docs/design.md). The packed vector ends with
+    ``M_theta`` the mass matrix of the law's own theta at the measured q (the compiled engine computes
+    :math:`M r` on the kinematics of the law's regressor pass; the Python path as
+    :math:`Y(q, 0, 0, r)\theta - Y(q, 0, 0, 0)\theta`). Spong's proof needs only :math:`K(q) \succeq k I`
+    uniformly, which a positive definite M gives (K = 0 is allowed with b > 0); the scheduled part puts
+    every mode of :math:`M^{-1}K` at b for the model, where a constant K spreads them by M's coupling
+    and its variation over the configurations (docs/design.md). The packed vector ends with
     ``[b, has_matrix, K's off-diagonal part (n * n, row-major) if K is a matrix]``
     (:meth:`pack`, :func:`rc3r.controllers._kernels.law_signals`).
     """
@@ -295,7 +296,7 @@ class _Sliding(Law):
         super().__post_init__()
         b = _scalar("K_inertia", _nonnegative("K_inertia", self.K_inertia))
         object.__setattr__(self, "K_inertia", b)
-        if b > 0.0 and not _is_matrix(self.K):  # b M(q_d) is positive definite: K >= 0 is enough
+        if b > 0.0 and not _is_matrix(self.K):  # b M(q) is positive definite: K >= 0 is enough
             object.__setattr__(self, "K", _nonnegative("K", self.K))
         else:
             object.__setattr__(self, "K", _gain_matrix("K", self.K))
@@ -315,7 +316,7 @@ class _Sliding(Law):
         return [np.array([self.K_inertia, 1.0]), (self.K - np.diag(np.diag(self.K))).ravel()]
 
     def k_min(self, m_min: float = 0.0) -> float:
-        """The smallest eigenvalue of ``K + K_inertia M(q_d)`` [N m s/rad] given ``lambda_min(M) >= m_min``
+        """The smallest eigenvalue of ``K + K_inertia M(q)`` [N m s/rad] given ``lambda_min(M) >= m_min``
         [kg m^2]: of K (its smallest entry if diagonal) plus ``K_inertia m_min``."""
         k = float(np.linalg.eigvalsh(self.K)[0] if self.K.ndim == 2 else np.min(self.K))
         return k + self.K_inertia * float(m_min)

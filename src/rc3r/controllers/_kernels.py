@@ -62,7 +62,7 @@ def law_signals(code, cp, q, qd, ref, v, a, r, w):
     else:
         # sliding laws: e = q - q_d, v = qd_d - Lambda e, a = qdd_d - Lambda e_dot,
         # r = qd - v = e_dot + Lambda e, w = -K r (K diagonal, plus its off-diagonal part if packed;
-        # the scheduled -K_inertia M(q_d) r is the caller's: it needs the robot, :func:`inertia_gain`)
+        # the scheduled -K_inertia M(q) r is the caller's: it needs the robot, :func:`inertia_gain`)
         for i in range(n):
             lam = cp[g + n + i]
             e = q[i] - ref[0, i]
@@ -89,7 +89,7 @@ def tail(code, cp, n):
 
 @njit(**_INLINE)
 def inertia_gain(code, cp, n):
-    """A sliding law's ``K_inertia`` b [1/s] (0 for FBL and PD): the caller subtracts ``b M(q_d) r`` from w."""
+    """A sliding law's ``K_inertia`` b [1/s] (0 for FBL and PD): the caller subtracts ``b M(q) r`` from w."""
     if code == FBL or code == PD:
         return 0.0
     return cp[tail(code, cp, n)]

@@ -98,6 +98,6 @@ def error_bound(law: Law, m_min: float, m_max: float, n: int) -> np.ndarray:
     if not (0 < m_min <= m_max and np.isfinite(m_max)):
         raise ValueError(f"need 0 < m_min <= m_max (finite), got {m_min}, {m_max}")
     mu = lyapunov_margin(law)
-    k_min = law.k_min(m_min)  # K + K_inertia M(q_d) >= (lambda_min(K) + K_inertia m_min) I
+    k_min = law.k_min(m_min)  # K + K_inertia M(q) >= (lambda_min(K) + K_inertia m_min) I
     lam = np.broadcast_to(np.asarray(law.Lambda, dtype=float), (n,))
     return np.sqrt(m_max / m_min * mu / k_min) / lam

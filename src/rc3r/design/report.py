@@ -65,7 +65,7 @@ def design_markdown(result, command: str = "") -> str:
               f"L_Y = max lambda_max(M^-1 Y Y^T) = {d.L_Y:.4g} (rho L_Y / eps is a rate [1/s]), "
               f"L_K = max lambda_max(M^-1 K) = {d.L_K:.4g} 1/s, so:", "",
               f"* velocity-loop bandwidth b = {d.bandwidth:.4g} 1/s ("
-              + ("K(t) = b M(q_d(t)), scheduled on the reference: every mode of M^-1 K is b there"
+              + ("K(q) = b M(q), scheduled: every mode of the model's M^-1 K is b"
                  if d.scaling == "inertia" else "K = b M(q_d(0)), the full matrix"
                  if d.scaling == "full" else "K_i = b / (M^-1(q_d(0)))_ii") + "), "
               f"Lambda = {d.Lambda:.4g} 1/s;",

@@ -28,11 +28,11 @@ controller's model), :math:`\lambda_{\max}(M^{-1}G) \le \lambda_{\max}(M^{-1}K) 
 **The fast form** (:func:`fast_design`, no simulation) asks for more: the loop must still be free
 of oscillation at ``rate / margin`` (period :math:`T' = mT`). It takes
 
-* the scheduled K (``coupling="inertia"``, the default): :math:`K(t) = b\,M(q_d(t))` (the law's
-  ``K_inertia`` = b, its constant K = 0): on the reference every mode of :math:`M^{-1}K(t)` is b, so
+* the scheduled K (``coupling="inertia"``, the default): :math:`K(q) = b\,M(q)` (the law's
+  ``K_inertia`` = b, its constant K = 0): every mode of the model's :math:`M^{-1}K` is b, so
   :math:`L_K = b` and :math:`b = \min(\mathrm{rate}/20,\; 125,\; a_d / (4 T'))`: K may use a quarter of
   the budget; :math:`\Lambda = \min(b / 2.5, 50)` [1/s]. Spong's proof needs only a uniformly positive
-  definite K(t);
+  definite K(q);
 * or a constant K (``coupling="diag"``): :math:`K_i = b\,\kappa_i` with
   :math:`\kappa_i = 1/(M^{-1}(q_d(0)))_{ii}` (the inertia joint i moves with the other joints free;
   ``scaling="diag"`` takes :math:`M_{ii}(q_d(0))`, :func:`rc3r.controllers.inertia_scaled_gain`) and
@@ -253,7 +253,7 @@ def _check_rate(rate, margin) -> tuple[float, float]:
 def eps_boundary(spec: Spectrum, rate: float, rho: float, K, delay: int = 0, rho_i=None,
                  K_inertia: float = 0.0) -> float:
     """The smallest eps for which the rule's held loop at ``rate`` is stable (inf: K alone is unstable);
-    ``K_inertia`` b adds b to every mode of M^-1 K (the scheduled ``b M(q_d)`` on the spectrum's own M)."""
+    ``K_inertia`` b adds b to every mode of M^-1 K (the scheduled ``b M(q)`` on the spectrum's own M)."""
     T = 1.0 / float(rate)
     K = np.asarray(K, float)
     room = stability_limit(delay) - T * (spec.lam(K if K.ndim == 2 else np.broadcast_to(K, (spec.n,)))
@@ -281,8 +281,8 @@ def fast_design(spec: Spectrum, rate: float, *, rho: float, rho_i=None, delay: i
     Lambda : float, optional
         Error bandwidth [1/s] (default min(rate / 50, 50)).
     coupling : {"inertia", "diag", "full", "auto"}
-        The sliding laws' K: ``"inertia"`` (the default) the scheduled ``K(t) = b M(q_d(t))``
-        (``K = 0``, ``K_inertia = b``: every mode of M^-1 K(t) is b on the reference, so neither M's
+        The sliding laws' K: ``"inertia"`` (the default) the scheduled ``K(q) = b M(q)``
+        (``K = 0``, ``K_inertia = b``: every mode of M^-1 K is b for the model, so neither M's
         coupling nor its variation along the trajectory caps b); ``"diag"`` the constant ``b kappa``;
         ``"full"`` the constant ``b M(q_d(0))``; ``"auto"`` the constant one of the two with the larger b.
     """
@@ -336,7 +336,7 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
         return x if x.ndim == 2 else np.broadcast_to(x, (n,))
 
     if isinstance(law, (Robust, RobustPerCoefficient, Adaptive)):
-        L_K = spec.lam(vec(law.K)) + law.K_inertia  # the scheduled b M(q_d) on the spectrum's M: + b
+        L_K = spec.lam(vec(law.K)) + law.K_inertia  # the scheduled b M(q) on the spectrum's M: + b
         lam = float(np.max(law.Lambda))
         if isinstance(law, Robust):
             fig = Tm * (L_K + law.rho / law.eps * spec.lam_yy())

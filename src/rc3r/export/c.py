@@ -101,7 +101,7 @@ def check_exportable(law, trajectory) -> None:
 def _law_parts(law, n: int) -> tuple[str, str, str]:
     """(constants, signals body, output body, coupling, schedule) of the law in C, from its packed vector
     ``law.pack(n)`` (coupling: the off-diagonal part of a matrix K, after the per-joint loop; schedule: the
-    ``-K_inertia M(q_d) r`` of a scheduled K, before the regressor's evaluation; empty otherwise)."""
+    ``-K_inertia M(q) r`` of a scheduled K, before the regressor's evaluation; empty otherwise)."""
     cp = np.asarray(law.pack(n), dtype=float)
     p = law.p
     g = 1 + p
@@ -124,17 +124,17 @@ def _law_parts(law, n: int) -> tuple[str, str, str]:
         consts += [f"static const double rc3r_Gamma[RC3R_P] = {c_array(cp[s:s + p])};"]
     coupling = schedule = ""
     o = s + {K.ROBUST: 2, K.ROBUST_COEFF: 2 * p, K.ADAPTIVE: p}.get(code, 0)  # the tail: [b, has_matrix, Kc]
-    if code not in (K.FBL, K.PD) and cp[o] > 0.0:  # K(t) = K + b M(q_d): M(q_d) r through the regressor
+    if code not in (K.FBL, K.PD) and cp[o] > 0.0:  # K(q) = K + b M(q): M(q) r through the regressor
         consts += [f"static const double rc3r_K_inertia = {c_double(cp[o])};  /* b [1/s] */",
                    f"static const double rc3r_theta_K[RC3R_P] = {c_array(cp[1:1 + p])};  /* M's theta */"]
-        schedule = """    {  /* scheduled K: w -= b (Y(q_d, 0, 0, r) - Y(q_d, 0, 0, 0)) theta = b M(q_d) r */
+        schedule = """    {  /* scheduled K: w -= b (Y(q, 0, 0, r) - Y(q, 0, 0, 0)) theta = b M(q) r */
         double zero[RC3R_N], m1[RC3R_N], m0[RC3R_N];
         int i;
         for (i = 0; i < RC3R_N; ++i)
             zero[i] = 0.0;
-        rc3r_regressor_eval(&wk, ref[0], zero, zero, r);
+        rc3r_regressor_eval(&wk, q, zero, zero, r);
         rc3r_regressor_apply(&wk, rc3r_theta_K, zero, m1);
-        rc3r_regressor_eval(&wk, ref[0], zero, zero, zero);
+        rc3r_regressor_eval(&wk, q, zero, zero, zero);
         rc3r_regressor_apply(&wk, rc3r_theta_K, zero, m0);
         for (i = 0; i < RC3R_N; ++i)
             w[i] -= rc3r_K_inertia * (m1[i] - m0[i]);

@@ -12,7 +12,9 @@ of the regressor without forming it, in O(n):
   r_i S_i`` (accumulated from the base outwards) in body j's frame;
 * :func:`apply_into` -- :math:`u = w + Y \theta`: each body's Newton--Euler wrench with theta
   scattered into its 10 standard parameters (zero outside the base columns), carried to the
-  world frame and summed over its subtree from the tip inwards, ``u_i = w_i + S_i . W_i``.
+  world frame and summed over its subtree from the tip inwards, ``u_i = w_i + S_i . W_i``;
+* :func:`mass_into` -- :math:`M_\theta(q)\, r` on the same kinematics (one pass of accelerations
+  ``S_j r_j``, no velocity, no gravity): the scheduled K of the sliding laws.
 
 ``F_j`` is body j's Newton--Euler regressor (6 x 10) and ``Y[i, 10 j + c] = S_i . F_j[:, c]``
 (:mod:`.pinocchio_kernel`); the two contractions are the ones the C export computes
@@ -28,7 +30,8 @@ from numba import njit
 
 from .pinocchio_kernel import _cross, _forward_dynamics_one, _fd_work, _kinematics, _mv, _needed, _regressor_one, _work
 
-__all__ = ["make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into"]
+__all__ = ["make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into",
+           "mass_into"]
 
 _JIT = dict(cache=True, nogil=True, fastmath=False)
 _INLINE = dict(_JIT, inline="always")
@@ -182,14 +185,64 @@ def _apply(ints, columns, th, w, u, cw):
                 W[lam, k] += W[j, k]
 
 
+@njit(**_INLINE)
+def _mass(ints, columns, th, r, out, cw, mw):
+    """out (n,) = M_th(q) r on the kinematics of the last :func:`_passes` (at q): the recursive
+    Newton--Euler wrench of the accelerations ``A_j = A_lambda + S_j r_j`` alone (no velocity, no
+    gravity), theta scattered into the 10 standard parameters of each body. ``mw``: (n, 6) A, (n, 6) W,
+    (n, 10) pi, (4, 3) scratch."""
+    R, P, S = cw[0], cw[1], cw[2]
+    A, W, X, T = mw
+    n = out.shape[0]
+    X[:, :] = 0.0
+    for c in range(columns.size):
+        col = int(columns[c])
+        X[col // 10, col % 10] = th[c]
+    t, lin, ang, t2 = T[0], T[1], T[2], T[3]
+    for j in range(n):
+        lam = int(ints[j, 0])
+        for k in range(6):
+            A[j, k] = (A[lam, k] if lam >= 0 else 0.0) + S[j, k] * r[j]
+        _cross(A[j, 3:], P[j], t)  # local (a, alpha) = (R^T (A_lin + A_ang x p), R^T A_ang)
+        for k in range(3):
+            t[k] += A[j, k]
+        _mv(R[j], t, lin, True)
+        _mv(R[j], A[j, 3:], ang, True)
+        pi = X[j]
+        h, I = pi[1:4], pi[4:10]
+        _cross(ang, h, t)  # f = m a + alpha x h, n = h x a + I alpha
+        f0, f1, f2 = pi[0] * lin[0] + t[0], pi[0] * lin[1] + t[1], pi[0] * lin[2] + t[2]
+        _cross(h, lin, t2)
+        n0 = t2[0] + I[0] * ang[0] + I[1] * ang[1] + I[3] * ang[2]
+        n1 = t2[1] + I[1] * ang[0] + I[2] * ang[1] + I[4] * ang[2]
+        n2 = t2[2] + I[3] * ang[0] + I[4] * ang[1] + I[5] * ang[2]
+        t[0], t[1], t[2] = f0, f1, f2
+        _mv(R[j], t, W[j, :3], False)  # f_O = R f
+        t[0], t[1], t[2] = n0, n1, n2
+        _mv(R[j], t, t2, False)  # n_O = R n + p x f_O
+        _cross(P[j], W[j, :3], W[j, 3:])
+        for k in range(3):
+            W[j, 3 + k] += t2[k]
+    for j in range(n - 1, -1, -1):
+        lam = int(ints[j, 0])
+        acc = 0.0
+        for k in range(6):
+            acc += S[j, k] * W[j, k]
+        out[j] = acc
+        if lam >= 0:
+            for k in range(6):
+                W[lam, k] += W[j, k]
+
+
 @njit(**_JIT)
 def make_work(kc):
-    """``(constants, regressor scratch, dynamics scratch, column mask, contraction scratch)``: the views of
+    """``(constants, regressor scratch, dynamics scratch, column mask, contraction scratch, mass scratch)``: the views of
     ``kc`` (made once, not per call), the arrays of :func:`.pinocchio_kernel._work`,
     :func:`.pinocchio_kernel._fd_work` and :func:`_contract_work` for ``n = kc[0]``, the column mask."""
     n = int(kc[0])
     consts = _unpack(kc)
-    return consts, _work(n), _fd_work(n), _needed(consts[2], n), _contract_work(n)
+    return consts, _work(n), _fd_work(n), _needed(consts[2], n), _contract_work(n), \
+        (np.empty((n, 6)), np.empty((n, 6)), np.empty((n, 10)), np.empty((4, 3)))
 
 
 @njit(**_INLINE)
@@ -225,3 +278,10 @@ def apply_into(kc, Y, th, w, u, wk):
     """u (n,) = w + Y th at the state of the last :func:`passes_into`."""
     _geo, ints, columns, _geoz, _piz = wk[0]
     _apply(ints, columns, th, w, u, wk[4])
+
+
+@njit(**_INLINE)
+def mass_into(kc, q, th, r, out, Y, wk):
+    """out (n,) = M_th(q) r at the q of the last :func:`passes_into` (its kinematics; ``q`` unused)."""
+    _geo, ints, columns, _geoz, _piz = wk[0]
+    _mass(ints, columns, th, r, out, wk[4], wk[5])

@@ -51,12 +51,13 @@ HMAX = 0.001
 
 #: The line of :mod:`.engines.compiled` that each instantiation replaces.
 MARKER = ("from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, "
-          "make_work as _make_work, passes_into as _passes, xi_into as _xi  # kernel supply")
+          "make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply")
 
 #: Age [s] past which an instantiation of another package version is removed.
 STALE_S = 86400.0
 
-_SUPPLY = ("make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into")
+_SUPPLY = ("make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into",
+           "mass_into")
 _DOTTED = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*\Z")
 _INSTANCES: dict = {}
 

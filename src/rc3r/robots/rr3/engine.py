@@ -15,7 +15,7 @@ from ...controllers._kernels import apply_regressor, regressor_transpose
 from . import kernels as K
 
 __all__ = ["make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into",
-           "pack", "ENGINE"]
+           "mass_into", "pack", "ENGINE"]
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -60,6 +60,15 @@ def xi_into(kc, Y, r, xi, wk):
 def apply_into(kc, Y, th, w, u, wk):
     """u = w + Y th on the formed Y."""
     apply_regressor(Y, th, w, u)
+
+
+
+@njit(**dict(_JIT, inline="always"))
+def mass_into(kc, q, th, r, out, Y, wk):
+    """out = M_th(q) r of the closed form (section 3.1; ``wk[0]`` holds M)."""
+    K.mass_matrix_into(th, q, wk[0])
+    for i in range(3):
+        out[i] = wk[0][i, 0] * r[0] + wk[0][i, 1] * r[1] + wk[0][i, 2] * r[2]
 
 
 #: This module's dotted name, what :attr:`RR3.compiled_kernels` hands to the engine.

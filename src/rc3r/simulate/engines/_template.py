@@ -1,13 +1,13 @@
 r"""The kernel supply of the compiled engine: what a robot hands to :mod:`.compiled`, as stubs.
 
-:mod:`rc3r.simulate.engines.compiled` is written once, against the six functions below. It is
+:mod:`rc3r.simulate.engines.compiled` is written once, against the seven functions below. It is
 never compiled as it stands: :mod:`rc3r.simulate._fast` writes a copy of its source per kernel
 supply with this module's import line replaced by the supply's module (numba caches a module
 on disk like any file, but not a function that receives another jitted function). A robot
 names its supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`, ``(module, kc)``:
 
 ``module`` : str
-    Dotted name of an importable module defining, with ``numba.njit``, the six functions
+    Dotted name of an importable module defining, with ``numba.njit``, the seven functions
     of this one with the same signatures (``rc3r.robots.rr3.engine`` for the paper's arm,
     ``rc3r.robots.pinocchio_supply`` for any serial chain).
 ``kc`` : ndarray (float64, 1-d)
@@ -68,3 +68,10 @@ def xi_into(kc, Y, r, xi, wk):
 def apply_into(kc, Y, th, w, u, wk):
     """Fill ``u`` (n,) with ``w + Y th`` at the state of the last :func:`passes_into`."""
     u[:] = np.nan
+
+
+@njit(**_JIT)
+def mass_into(kc, q, th, r, out, Y, wk):
+    """Fill ``out`` (n,) with ``M_th(q) r`` (the mass matrix of the parameters ``th``), called after
+    :func:`passes_into` at the same ``q`` (whose kinematics a supply may reuse)."""
+    out[:] = np.nan

@@ -21,7 +21,7 @@ The plant's effects (friction, saturation: the fields ``fx`` of
 by :mod:`rc3r.plants._kernels`; the law by the generic kernels of
 :mod:`rc3r.controllers._kernels` (selected by its integer code). The robot enters only
 through its **kernel supply** (:mod:`._template` states the contract): ``_make_work``,
-``_passes``, ``_xi``, ``_apply`` and ``_fd`` below, on its packed constants ``kc``. n is ``U.shape[1]``, p is
+``_passes``, ``_xi``, ``_apply``, ``_mass`` and ``_fd`` below, on its packed constants ``kc``. n is ``U.shape[1]``, p is
 ``cp[0]``.
 
 This module is never run as it stands: the import line marked ``# kernel supply`` names the
@@ -39,7 +39,7 @@ from numba import njit
 
 from rc3r.controllers._kernels import inertia_gain, law_signals, law_theta, uses_xi
 from rc3r.plants._kernels import actuate, apply_effects, measure
-from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, passes_into as _passes, xi_into as _xi  # kernel supply
+from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
 from rc3r.trajectory import reference_into
 
@@ -51,22 +51,16 @@ def control(law, cp, q, qd, z, ref, kc, wk, u, zdot, Y, th_eff, v, a, r, w):
     """u (n,) and zdot of a registered law (code ``law``) on the supply's regressor; returns ||Y^T r||.
 
     ``u = w + Y th_eff`` and ``xi = Y^T r`` through the supply's contractions (``Y`` is scratch).
-    ``ref`` (6, n): rows q_d, qd_d, qdd_d, then scratch for a scheduled K (``K_inertia`` b > 0:
-    ``w -= b M(q_d) r`` with ``M(q_d) r = Y(q_d, 0, 0, r) theta - Y(q_d, 0, 0, 0) theta``, the law's theta)."""
+    A scheduled K (``K_inertia`` b > 0) subtracts ``b M(q) r`` from w (the law's theta, on the
+    kinematics of the same pass). ``ref`` (6, n): rows q_d, qd_d, qdd_d, then scratch."""
     law_signals(law, cp, q, qd, ref, v, a, r, w)
+    _passes(kc, q, qd, v, a, Y, wk)
     b = inertia_gain(law, cp, q.shape[0])
     if b > 0.0:
-        n = q.shape[0]
-        zero, m1, m0 = ref[3], ref[4], ref[5]
-        th0 = cp[1:1 + int(cp[0])]
-        zero[:] = 0.0
-        _passes(kc, ref[0], zero, zero, r, Y, wk)
-        _apply(kc, Y, th0, zero, m1, wk)
-        _passes(kc, ref[0], zero, zero, zero, Y, wk)
-        _apply(kc, Y, th0, zero, m0, wk)
-        for i in range(n):
-            w[i] -= b * (m1[i] - m0[i])
-    _passes(kc, q, qd, v, a, Y, wk)
+        m1 = ref[3]
+        _mass(kc, q, cp[1:1 + int(cp[0])], r, m1, Y, wk)
+        for i in range(q.shape[0]):
+            w[i] -= b * m1[i]
     if uses_xi(law):
         _xi(kc, Y, r, th_eff, wk)
     yn = law_theta(law, cp, q.shape[0], z, th_eff, zdot)
