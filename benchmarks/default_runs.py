@@ -19,27 +19,18 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROBOTS = Path(sys.prefix) / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / "site-packages" / \
-    "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from design_table import ARMS, ROBOTS  # noqa: E402  (the same arms, URDFs and locked joints)
 
-#: name -> (URDF under ROBOTS, locked joints)
-ARMS = {
-    "ur3": ("ur_description/urdf/ur3_robot.urdf", {}),
-    "ur5": ("ur_description/urdf/ur5_robot.urdf", {}),
-    "ur10": ("ur_description/urdf/ur10_robot.urdf", {}),
-    "panda": ("panda_description/urdf/panda.urdf", {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}),
-    "z1": ("z1_description/urdf/z1.urdf", {"jointGripper": 0.0}),
-    "kinova": ("kinova_description/robots/kinova.urdf", {}),
-    "xarm7": ("xarm_description/urdf/xarm7.urdf", {}),
-    "double_pendulum": ("double_pendulum_description/urdf/double_pendulum.urdf", {}),
-}
+#: The arms run by default: every fixed-base arm of the table but the SO-101, and the double pendulum.
+DEFAULT_ARMS = "ur3,ur5,ur10,panda,z1,kinova,xarm7,double_pendulum"
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--payloads", default="0:3,0:5", help="comma-separated LO:HI payload ranges [kg]")
     p.add_argument("--rates", default="500,1000", help="comma-separated controller rates [Hz]")
-    p.add_argument("--arms", default=",".join(ARMS), help=f"comma-separated arms of {', '.join(ARMS)}")
+    p.add_argument("--arms", default=DEFAULT_ARMS, help=f"comma-separated arms of {', '.join(ARMS)}")
     args = p.parse_args(argv)
     rc3r = str(Path(sys.executable).parent / "rc3r")
     bad = 0

@@ -48,6 +48,7 @@ ARMS = {
     "kinova": ("kinova_description/robots/kinova.urdf", {}),
     "xarm7": ("xarm_description/urdf/xarm7.urdf", {}),
     "so101": ("so_arm_description/urdf/so101.urdf", {"gripper": 0.0}),
+    "double_pendulum": ("double_pendulum_description/urdf/double_pendulum.urdf", {}),
 }
 DEFAULT_ARMS = "ur5,ur10,panda,z1,kinova,xarm7"
 
