@@ -40,6 +40,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
 ``rc3r.controllers.ellipsoid``         law ``robust-ellipsoid``: Spong's term for ||theta - theta_0||_P <= 1
 ``rc3r.trajectory``                    desired trajectories (sines, quintic), compiled evaluation
+``rc3r._trig``                         sin and cos from one argument reduction (compiled; the closed form's)
 ``rc3r.uncertainty``                   parameter uncertainty (re-exports the three below)
 ``rc3r.uncertainty.box``               boxes on standard parameters, box files, perturbed plants
 ``rc3r.uncertainty.bounds``            theta_0 and rho: the paper's method, certified exact ranges

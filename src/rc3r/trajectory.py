@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from ._numba_cache import ready_or_python
+from ._trig import sincos
 
 from .errors import ConfigError
 
@@ -44,8 +45,7 @@ def reference_into(tp, t, ref):
                 A = tp[base + 3 * k]
                 w = tp[base + 3 * k + 1]
                 ph = tp[base + 3 * k + 2]
-                s = math.sin(w * t + ph)
-                c = math.cos(w * t + ph)
+                s, c = sincos(w * t + ph)
                 q += A * s
                 qd += A * w * c
                 qdd -= A * w * w * s

@@ -16,6 +16,10 @@ import math
 
 from numba import njit
 
+import numpy as np
+
+from ..._trig import FAST_LIMIT, sincos, sincos_fast
+
 _JIT = dict(cache=True, nogil=True, fastmath=False)
 
 
@@ -24,9 +28,9 @@ _INLINE = dict(_JIT, inline="always")
 
 @njit(**_INLINE)
 def _trig(q2, q3):
-    """(s2, c2, s3, c3, s23, c23); sin/cos(q2 + q3) by the addition theorem (4 libm calls)."""
-    s2 = math.sin(q2); c2 = math.cos(q2)
-    s3 = math.sin(q3); c3 = math.cos(q3)
+    """(s2, c2, s3, c3, s23, c23); sin/cos(q2 + q3) by the addition theorem (two :func:`~rc3r._trig.sincos`)."""
+    s2, c2 = sincos(q2)
+    s3, c3 = sincos(q3)
     return s2, c2, s3, c3, s2 * c3 + c2 * s3, c2 * c3 - s2 * s3
 
 
@@ -250,13 +254,57 @@ def slotine_li_batch(Q, QD, V, A, l2, g0, out):
                            A[n, 0], A[n, 1], A[n, 2], l2, g0, out[n])
 
 
+#: States per block of :func:`inverse_dynamics_batch` (its columns: 11 x 128 doubles, 11 KiB).
+BLOCK = 128
+
+
+@njit(**_JIT)
+def _tau_columns(th, q2, q3, qd1, qd2, qd3, a1, a2, a3, l2, g0, t1, t2, t3, m):
+    """tau of states 0..m-1 given as contiguous columns, every angle ``|q| < FAST_LIMIT``: a
+    straight-line loop body (:func:`rc3r._trig.sincos_fast`), which LLVM runs in SIMD lanes."""
+    for n in range(m):
+        s2, c2 = sincos_fast(q2[n])
+        s3, c3 = sincos_fast(q3[n])
+        s23 = s2 * c3 + c2 * s3
+        c23 = c2 * c3 - s2 * s3
+        m11, m12, m13, m22, m23 = _inertia_terms(th, s2, c2, s3, c3, s23, c23)
+        A, B, D, E, F = _christoffel_terms(th, s2, c2, s3, c3, s23, c23)
+        c1, c2_, c3_ = _coriolis_vector(A, B, D, E, F, qd1[n], qd2[n], qd3[n])
+        g2, g3 = _gravity_terms(th, s2, c2, s23, c23, l2, g0)
+        t1[n] = m11 * a1[n] + m12 * a2[n] + m13 * a3[n] + c1
+        t2[n] = m12 * a1[n] + m22 * a2[n] + m23 * a3[n] + c2_ + g2
+        t3[n] = m13 * a1[n] + m23 * a2[n] + th[12] * a3[n] + c3_ + g3
+
+
 @njit(**_JIT)
 def inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out):
-    """tau = M qdd + S qd + g for each state, without storing Y."""
-    for n in range(Q.shape[0]):
-        m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, Q[n, 1], Q[n, 2], QD[n, 0], QD[n, 1],
-                                                              QD[n, 2], l2, g0)
-        a1 = QDD[n, 0]; a2 = QDD[n, 1]; a3 = QDD[n, 2]
-        out[n, 0] = m11 * a1 + m12 * a2 + m13 * a3 + h1
-        out[n, 1] = m12 * a1 + m22 * a2 + m23 * a3 + h2
-        out[n, 2] = m13 * a1 + m23 * a2 + th[12] * a3 + h3
+    """tau = M qdd + S qd + g for each state (N, 3), without storing Y.
+
+    In blocks of :data:`BLOCK` states copied into columns (:func:`_tau_columns`, SIMD across
+    states); a block holding an angle outside :data:`rc3r._trig.FAST_LIMIT` (or NaN) takes the
+    per-state path of :func:`_dynamics_terms` (libm there). Same arithmetic either way.
+    """
+    N = Q.shape[0]
+    C = np.empty((11, BLOCK))
+    for b0 in range(0, N, BLOCK):
+        m = min(BLOCK, N - b0)
+        fast = True
+        for i in range(m):
+            k = b0 + i
+            C[0, i] = Q[k, 1]; C[1, i] = Q[k, 2]
+            C[2, i] = QD[k, 0]; C[3, i] = QD[k, 1]; C[4, i] = QD[k, 2]
+            C[5, i] = QDD[k, 0]; C[6, i] = QDD[k, 1]; C[7, i] = QDD[k, 2]
+            if not (abs(Q[k, 1]) < FAST_LIMIT and abs(Q[k, 2]) < FAST_LIMIT):
+                fast = False
+        if fast:
+            _tau_columns(th, C[0], C[1], C[2], C[3], C[4], C[5], C[6], C[7], l2, g0, C[8], C[9], C[10], m)
+            for i in range(m):
+                out[b0 + i, 0] = C[8, i]; out[b0 + i, 1] = C[9, i]; out[b0 + i, 2] = C[10, i]
+            continue
+        for n in range(b0, b0 + m):
+            m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, Q[n, 1], Q[n, 2], QD[n, 0], QD[n, 1],
+                                                                  QD[n, 2], l2, g0)
+            a1 = QDD[n, 0]; a2 = QDD[n, 1]; a3 = QDD[n, 2]
+            out[n, 0] = m11 * a1 + m12 * a2 + m13 * a3 + h1
+            out[n, 1] = m12 * a1 + m22 * a2 + m23 * a3 + h2
+            out[n, 2] = m13 * a1 + m23 * a2 + th[12] * a3 + h3
