@@ -77,7 +77,7 @@ CONFIG_KEYS = {
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
     "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "engine", "jac_reuse",
-                   "max_steps", "q_max", "qd_max", "u_max"),
+                   "method", "max_steps", "q_max", "qd_max", "u_max"),
 }
 
 

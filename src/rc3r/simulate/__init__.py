@@ -47,7 +47,8 @@ from ..errors import DivergenceError, ParameterError
 from . import status as S
 from .engines.base import engine_names as _engine_names
 
-__all__ = ["SimOptions", "SimResult", "simulate", "ENGINES", "planned_engine", "default_substeps", "stiffness"]
+__all__ = ["SimOptions", "SimResult", "simulate", "ENGINES", "METHODS", "planned_engine", "default_substeps",
+           "stiffness"]
 
 #: Engines accepted by :class:`SimOptions`: ``"auto"`` and every name and alias of the engine registry
 #: (:mod:`rc3r.simulate.engines`; a live view: ``"auto", "fast", "compiled", "python", "reference"`` and
@@ -57,6 +58,10 @@ ENGINES = _engine_names()
 #: Largest stored time series (rows): each row holds ~(3 n + nz + 2) doubles, so 5e6 rows of the
 #: 3R are ~0.6 GB. A longer run must lower ``output_rate``.
 MAX_ROWS = 5_000_000
+
+#: The fast engine's continuous-time Rosenbrock methods: name -> code of
+#: :func:`rc3r.simulate.engines.compiled.integrate_continuous` (its ``ODE23S``, ``ROS4``).
+METHODS = {"ros4": 1, "ode23s": 0}
 
 #: Most controller samples of a sampled run (1e9 samples take hours even compiled).
 MAX_SAMPLES = 1_000_000_000
@@ -95,6 +100,11 @@ class SimOptions:
         older one). 1 = every step (MATLAB's ode23s). The default 5 makes the FBL
         runs about 2x faster and the robust runs 1.0-1.3x, at the same accuracy against
         a tight SciPy Radau solution (``rc3r bench``, docs/performance.md).
+    method : {"ros4", "ode23s"}
+        Fast engine, continuous mode: the Rosenbrock method (:data:`METHODS`). ``"ros4"``
+        (default): Hairer & Wanner's L-stable order-4 method with an order-3 error estimate;
+        ``"ode23s"``: Shampine & Reichelt's order-2 pair (MATLAB's ode23s, the default before
+        2026-12-02). The python and reference engines use SciPy and ignore it.
     max_steps : float
         Work budget of continuous mode: integrator steps (accepted and rejected) per
         simulated second. The fast engine checks it inside the compiled loop (per 0.5 s
@@ -115,6 +125,7 @@ class SimOptions:
     nsub: int | None = None
     engine: str = "auto"
     jac_reuse: int = 5
+    method: str = "ode23s"
     max_steps: float = 1e6
     q_max: float = 1e3
     qd_max: float = 1e4
@@ -141,6 +152,8 @@ class SimOptions:
         if isinstance(self.jac_reuse, bool) or not isinstance(self.jac_reuse, (int, np.integer)) \
                 or not 1 <= self.jac_reuse <= 1000:
             raise ParameterError(f"jac_reuse must be an integer in [1, 1000], got {self.jac_reuse!r}")
+        if not isinstance(self.method, str) or self.method not in METHODS:
+            raise ParameterError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
         if not isinstance(self.engine, str) or self.engine not in ENGINES:
             raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
         rows = self.duration * (self.output_rate if self.rate is None else min(self.rate, self.output_rate))

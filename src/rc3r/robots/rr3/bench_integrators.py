@@ -8,6 +8,8 @@ trajectory) and the same tolerances (``rtol = 1e-6``, ``atol = 1e-8``):
 
 * ``rosenbrock, J every step`` -- MATLAB's ode23s scheme (``jac_reuse = 1``);
 * ``rosenbrock, J kept 5 steps`` -- the default (``jac_reuse = 5``);
+* ``ros4, J every step`` / ``ros4, J kept 5 steps`` -- ``SimOptions(method="ros4")``, Hairer &
+  Wanner's order-4 method (a Rosenbrock method, not a W-method: it wants the Jacobian of each step);
 * ``scipy Radau`` / ``scipy BDF`` -- :func:`scipy.integrate.solve_ivp` calling the
   compiled right-hand side (finite-difference Jacobian by SciPy), stored on the same
   1 kHz grid (``t_eval``) with ``max_step`` = 1 ms like the Rosenbrock runs.
@@ -41,19 +43,20 @@ def _scipy(spec, x0, t_out, method: str, rtol: float, atol: float):
     return sol.y.T[:, :3], wall, int(sol.nfev), sol.status == 0
 
 
-def _rosenbrock(spec, jac_reuse: int):
+def _rosenbrock(spec, jac_reuse: int, method: str = "ode23s"):
     from dataclasses import replace
 
     from ...simulate import simulate
 
-    opts = replace(spec.options, jac_reuse=jac_reuse, engine="fast")
+    opts = replace(spec.options, jac_reuse=jac_reuse, engine="fast", method=method)
     simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01))  # warm
     res = simulate(spec.plant, spec.law, spec.trajectory, opts)
     return res.q, res.wall_time_s, res.rhs_evals, res.ok
 
 
 def bench_integrators(duration: float = 10.0, progress=None) -> dict:
-    """Rosenbrock (J every step / kept 5 steps) vs SciPy Radau and BDF on the FBL and robust perturbed runs."""
+    """Rosenbrock ode23s and ROS4 (J every step / kept 5 steps) vs SciPy Radau and BDF on the FBL and robust
+    perturbed runs."""
     from ...simulate import _initial_state
     from ...study import build_run
 
@@ -68,6 +71,8 @@ def bench_integrators(duration: float = 10.0, progress=None) -> dict:
         rows = {}
         for label, run in (("rosenbrock, J every step", lambda: _rosenbrock(spec, 1)),
                            ("rosenbrock, J kept 5 steps", lambda: _rosenbrock(spec, 5)),
+                           ("ros4, J every step", lambda: _rosenbrock(spec, 1, "ros4")),
+                           ("ros4, J kept 5 steps", lambda: _rosenbrock(spec, 5, "ros4")),
                            ("scipy Radau", lambda: _scipy(spec, x0, t_out, "Radau", 1e-6, 1e-8)),
                            ("scipy BDF", lambda: _scipy(spec, x0, t_out, "BDF", 1e-6, 1e-8))):
             report(f"integrators: {ctrl}, {label} ...")

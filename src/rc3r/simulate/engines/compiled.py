@@ -11,7 +11,9 @@ State ``x = (q, qd, z)``: joint positions [rad], velocities [rad/s] and the cont
   ``jac_reuse`` accepted steps (refreshed after a rejection; 1 = every step as ode23s).
   Steps are not clipped to the output times: the stored rows are the cubic Hermite
   interpolant of the two ends of the step that contains them (third order, like the step).
-  At most ``max_steps`` steps per call (the work budget).
+  At most ``max_steps`` steps per call (the work budget). ``method = ROS4``
+  (``SimOptions(method="ros4")``): Hairer & Wanner's L-stable order-4 Rosenbrock method with
+  an order-3 embedded solution, same Jacobian, step control and outputs.
 * :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and
   held (zero-order hold); the plant is integrated over each period by classical RK4
   with ``nsub`` sub-steps; the controller state is updated by forward Euler.
@@ -40,6 +42,7 @@ from numba import njit
 from rc3r.controllers._kernels import inertia_gain, law_signals, law_theta, uses_xi
 from rc3r.plants._kernels import actuate, apply_effects, measure
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
+from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
 from rc3r.trajectory import reference_into
 
@@ -104,56 +107,6 @@ def closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v,
 
 
 @njit(**_JIT)
-def _lu_factor(A, piv):
-    """In-place LU with partial pivoting (small dense n x n)."""
-    n = A.shape[0]
-    for k in range(n):
-        p = k
-        big = abs(A[k, k])
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > big:
-                big = abs(A[i, k])
-                p = i
-        piv[k] = p
-        if p != k:
-            for j in range(n):
-                tmp = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = tmp
-        if A[k, k] == 0.0:
-            return False
-        inv = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            A[i, k] *= inv
-            f = A[i, k]
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= f * A[k, j]
-    return True
-
-
-@njit(**_JIT)
-def _lu_solve(LU, piv, b):
-    n = LU.shape[0]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
-    for i in range(n):
-        acc = b[i]
-        for j in range(i):
-            acc -= LU[i, j] * b[j]
-        b[i] = acc
-    for i in range(n - 1, -1, -1):
-        acc = b[i]
-        for j in range(i + 1, n):
-            acc -= LU[i, j] * b[j]
-        b[i] = acc / LU[i, i]
-
-
-@njit(**_JIT)
 def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys):
     """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x))."""
     n = x.shape[0]
@@ -173,9 +126,81 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
     return n + 1
 
 
+#: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
+ODE23S, ROS4 = 0, 1
+
+# ROS4: Hairer & Wanner, Solving ODEs II (1996), sec. IV.7, the L-stable order-4 method with 4 stages and an
+# L-stable embedded order-3 solution (GRK4-type, coefficients of the transformed form G k_i = f(Y_i) + sum
+# c_ij / h k_j + h gamma_i f_t, G = I / (h gamma_1) - J, as tabulated by KPP's Rosenbrock integrators);
+# stage 4 reuses stage 3's f (alpha_4 = alpha_3), so a step costs 2 new f plus f at the new state.
+_R4_A21 = 2.0
+_R4_A31 = 1.867943637803922
+_R4_A32 = 0.2344449711399156
+_R4_C21 = -7.137615036412310
+_R4_C31 = 2.580708087951457
+_R4_C32 = 0.6515950076447975
+_R4_C41 = -2.137148994382534
+_R4_C42 = -0.3214669691237626
+_R4_C43 = -0.6949742501781779
+_R4_M = (2.255570073418735, 0.2870493262186792, 0.4353179431840180, 1.093502252409163)
+_R4_E = (-0.2815431932141155, -0.07276199124938920, -0.1082196201495311, -1.093502252409163)
+_R4_ALPHA2 = 1.145640000000000
+_R4_ALPHA3 = 0.6552168638155900
+_R4_GAMMA = (0.5728200000000000, -1.769193891319233, 0.7592633437920482, -0.1049021087100450)
+
+
+@njit(**_JIT)
+def _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u, ref, Y, xi, v, a, r, w, ys,
+                 k1, k2, k3, k4, tmp, xnew, rtol, atol):
+    """One ROS4 step from (t, x) of size h (F0 = f(t, x), J, Ft at (t, x)): fills ``xnew`` and, if the
+    step is acceptable, ``F2 = f(t + h, xnew)`` (``u``, ``ys`` there). Returns ``(status, err, n_f)``:
+    status 0, 1 if the plant's M was not PD at a stage or at xnew, 2 if G is singular; err the scaled
+    RMS error estimate (as :func:`integrate_continuous`'s); n_f the evaluations of f made."""
+    n = x.shape[0]
+    hg = 1.0 / (h * _R4_GAMMA[0])
+    for i in range(n):
+        for j in range(n):
+            W[i, j] = -J[i, j]
+        W[i, i] += hg
+    if not _lu_factor(W, piv):
+        return 2, 1e300, 0
+    for i in range(n):
+        k1[i] = F0[i] + h * _R4_GAMMA[0] * Ft[i]
+    _lu_solve(W, piv, k1)
+    for i in range(n):
+        tmp[i] = x[i] + _R4_A21 * k1[i]
+    ok1 = closed_loop_rhs(t + _R4_ALPHA2 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
+    for i in range(n):
+        k2[i] = F1[i] + _R4_C21 / h * k1[i] + h * _R4_GAMMA[1] * Ft[i]
+    _lu_solve(W, piv, k2)
+    for i in range(n):
+        tmp[i] = x[i] + _R4_A31 * k1[i] + _R4_A32 * k2[i]
+    ok2 = closed_loop_rhs(t + _R4_ALPHA3 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
+    for i in range(n):
+        k3[i] = F1[i] + (_R4_C31 * k1[i] + _R4_C32 * k2[i]) / h + h * _R4_GAMMA[2] * Ft[i]
+    _lu_solve(W, piv, k3)
+    for i in range(n):
+        k4[i] = F1[i] + (_R4_C41 * k1[i] + _R4_C42 * k2[i] + _R4_C43 * k3[i]) / h + h * _R4_GAMMA[3] * Ft[i]
+    _lu_solve(W, piv, k4)
+    err = 0.0
+    for i in range(n):
+        xnew[i] = x[i] + _R4_M[0] * k1[i] + _R4_M[1] * k2[i] + _R4_M[2] * k3[i] + _R4_M[3] * k4[i]
+        ei = _R4_E[0] * k1[i] + _R4_E[1] * k2[i] + _R4_E[2] * k3[i] + _R4_E[3] * k4[i]
+        ei /= atol + rtol * max(abs(x[i]), abs(xnew[i]))
+        err += ei * ei
+    err = math.sqrt(err / n)
+    if not (ok1 and ok2):
+        return 1, err, 2
+    if err <= 1.0:  # f at the new state: the next step's F0, the outputs' u
+        if not closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys):
+            return 1, err, 3
+        return 0, err, 3
+    return 0, err, 2
+
+
 @njit(**_JIT)
 def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, lim,
-                         X, U, R, ynorm, jac_reuse, max_steps):
+                         X, U, R, ynorm, jac_reuse, max_steps, method):
     """Integrate from ``t_out[0]``; store x, u, q_d rows at every ``t_out`` (n joints: ``U.shape[1]``).
 
     At most ``max_steps`` steps (accepted and rejected) are taken in this call; past that it
@@ -185,6 +210,8 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
 
     The Jacobian is recomputed every ``jac_reuse`` accepted steps and after any
     rejected step taken with an older one (``jac_reuse = 1``: every step, as ode23s).
+    ``method``: :data:`ODE23S` (order 2, error estimate of order 3) or :data:`ROS4` (order 4,
+    embedded order 3: :func:`_ros4_stages`); both evaluate f at the new state before accepting it.
     Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
     ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
     """
@@ -194,7 +221,8 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     x = x0.copy()
     xnew = np.empty(n)
     F0 = np.empty(n); F1 = np.empty(n); F2 = np.empty(n); Ft = np.empty(n); Fp = np.empty(n)
-    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); tmp = np.empty(n)
+    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); tmp = np.empty(n)
+    q_err = 4.0 if method == ROS4 else 3.0  # the error estimate's order + 1: exponent of the step control
     J = np.empty((n, n)); W = np.empty((n, n)); piv = np.zeros(n, dtype=np.int64)
     nj = U.shape[1]
     p = int(cp[0])
@@ -232,37 +260,47 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
         while True:
             if nsteps + nrej >= max_steps:
                 return WORK, k, nrhs, nsteps, nrej, t
-            hd = h * d
-            for i in range(n):
-                for j in range(n):
-                    W[i, j] = -hd * J[i, j]
-                W[i, i] += 1.0
-            if not _lu_factor(W, piv):
-                return HMIN, k, nrhs, nsteps, nrej, t
-            for i in range(n):
-                k1[i] = F0[i] + hd * Ft[i]
-            _lu_solve(W, piv, k1)
-            for i in range(n):
-                tmp[i] = x[i] + 0.5 * h * k1[i]
-            ok1 = closed_loop_rhs(t + 0.5 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w,
-                                  ys)
-            for i in range(n):
-                k2[i] = F1[i] - k1[i]
-            _lu_solve(W, piv, k2)
-            for i in range(n):
-                k2[i] += k1[i]
-                xnew[i] = x[i] + h * k2[i]
-            ok2 = closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys)
-            nrhs += 2
-            for i in range(n):
-                k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
-            _lu_solve(W, piv, k3)
-            err = 0.0  # RMS norm of the scaled error estimate (Hairer & Wanner; SciPy's solve_ivp)
-            for i in range(n):
-                sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
-                ei = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]) / sc
-                err += ei * ei
-            err = math.sqrt(err / n)
+            if method == ROS4:
+                st4, err, nf = _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
+                                            ref, Y, xi, v, a, r, w, ys, k1, k2, k3, k4, tmp, xnew, rtol, atol)
+                nrhs += nf
+                if st4 == 2:
+                    return HMIN, k, nrhs, nsteps, nrej, t
+                ok1 = st4 == 0
+                ok2 = ok1
+            else:
+                hd = h * d
+                for i in range(n):
+                    for j in range(n):
+                        W[i, j] = -hd * J[i, j]
+                    W[i, i] += 1.0
+                if not _lu_factor(W, piv):
+                    return HMIN, k, nrhs, nsteps, nrej, t
+                for i in range(n):
+                    k1[i] = F0[i] + hd * Ft[i]
+                _lu_solve(W, piv, k1)
+                for i in range(n):
+                    tmp[i] = x[i] + 0.5 * h * k1[i]
+                ok1 = closed_loop_rhs(t + 0.5 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r,
+                                      w, ys)
+                for i in range(n):
+                    k2[i] = F1[i] - k1[i]
+                _lu_solve(W, piv, k2)
+                for i in range(n):
+                    k2[i] += k1[i]
+                    xnew[i] = x[i] + h * k2[i]
+                ok2 = closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w,
+                                      ys)
+                nrhs += 2
+                for i in range(n):
+                    k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
+                _lu_solve(W, piv, k3)
+                err = 0.0  # RMS norm of the scaled error estimate (Hairer & Wanner; SciPy's solve_ivp)
+                for i in range(n):
+                    sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
+                    ei = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]) / sc
+                    err += ei * ei
+                err = math.sqrt(err / n)
             if not (err <= 1e300):  # NaN or overflow
                 err = 1e300
             if ok1 and ok2 and err <= 1.0:
@@ -273,7 +311,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
                 nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w,
                                   ys)
                 jac_age = 0
-            h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / 3.0)) if err < 1e300 else 0.1 * h
+            h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / q_err)) if err < 1e300 else 0.1 * h
             if h < 1e-14 * max(1.0, abs(t)):
                 return HMIN, k, nrhs, nsteps, nrej, t
         nsteps += 1
@@ -310,7 +348,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
         for i in range(n):
             x[i] = xnew[i]
             F0[i] = F2[i]
-        fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / 3.0)))
+        fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / q_err)))
         h = h * fac
     return OK, t_out.shape[0], nrhs, nsteps, nrej, t
 
