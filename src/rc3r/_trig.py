@@ -1,7 +1,6 @@
 """sin x and cos x from one argument reduction, compiled (numba): the closed form's trigonometry.
 
-The 3R's closed-form model needs sin and cos of q2 and q3, and the sines trajectory sin and cos of
-``w t + phi``; libm computes each on its own (two argument reductions per angle, about 11 ns per
+The 3R's closed-form model needs sin and cos of q2 and q3 in every state; libm computes each on its own (two argument reductions per angle, about 11 ns per
 call on the development machine: 44 of the 55 ns of the 3R's tau on 2026-12-02, ``rc3r bench``'s
 "libm trig" row). :func:`sincos` returns both from one reduction:
 
@@ -15,7 +14,8 @@ with ``k = round(2 x / pi)``, ``y`` by Cody and Waite's reduction on a three-par
 the minimax polynomials of fdlibm's ``__kernel_sin`` and ``__kernel_cos`` (FreeBSD msun
 ``k_sin.c``, ``k_cos.c``, ``e_rem_pio2.c``: same coefficients; error below one ulp on
 ``|y| <= pi / 4``). Outside ``|x| < 10^5`` (a joint angle never is; NaN and infinity included) it
-calls libm. :func:`sincos_fast` is the same without that test and without a branch, for loops
+calls libm. (The trajectory keeps libm: the cold start runs it interpreted, and an
+interpreted call of this compiled function would compile it.) :func:`sincos_fast` is the same without that test and without a branch, for loops
 over many states that LLVM runs in SIMD lanes (the caller checks the range first:
 :func:`rc3r.robots.rr3.kernels.inverse_dynamics_batch`). Measured error against libm:
 ``tests/test_trig.py`` (at most 2 ulp of max(1, |result|)).

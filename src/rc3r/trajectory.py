@@ -21,7 +21,6 @@ import numpy as np
 from numba import njit
 
 from ._numba_cache import ready_or_python
-from ._trig import sincos
 
 from .errors import ConfigError
 
@@ -45,7 +44,8 @@ def reference_into(tp, t, ref):
                 A = tp[base + 3 * k]
                 w = tp[base + 3 * k + 1]
                 ph = tp[base + 3 * k + 2]
-                s, c = sincos(w * t + ph)
+                s = math.sin(w * t + ph)  # libm, not rc3r._trig: the cold start runs this interpreted
+                c = math.cos(w * t + ph)
                 q += A * s
                 qd += A * w * c
                 qdd -= A * w * w * s
