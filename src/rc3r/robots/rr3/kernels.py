@@ -281,22 +281,22 @@ def inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out):
     """tau = M qdd + S qd + g for each state (N, 3), without storing Y.
 
     In blocks of :data:`BLOCK` states copied into columns (:func:`_tau_columns`, SIMD across
-    states); a block holding an angle outside :data:`rc3r._trig.FAST_LIMIT` (or NaN) takes the
-    per-state path of :func:`_dynamics_terms` (libm there). Same arithmetic either way.
+    states); a block whose angles' sum of magnitudes is not below :data:`rc3r._trig.FAST_LIMIT`
+    (a NaN or an infinite angle, or angles of hundreds of turns) takes the per-state path of
+    :func:`_dynamics_terms` (libm where an angle is outside the range). Same arithmetic either way.
     """
     N = Q.shape[0]
     C = np.empty((11, BLOCK))
     for b0 in range(0, N, BLOCK):
         m = min(BLOCK, N - b0)
-        fast = True
+        tot = 0.0  # sum of |angle| over the block: below FAST_LIMIT, every angle is (NaN, inf: not below)
         for i in range(m):
             k = b0 + i
             C[0, i] = Q[k, 1]; C[1, i] = Q[k, 2]
             C[2, i] = QD[k, 0]; C[3, i] = QD[k, 1]; C[4, i] = QD[k, 2]
             C[5, i] = QDD[k, 0]; C[6, i] = QDD[k, 1]; C[7, i] = QDD[k, 2]
-            if not (abs(Q[k, 1]) < FAST_LIMIT and abs(Q[k, 2]) < FAST_LIMIT):
-                fast = False
-        if fast:
+            tot += abs(Q[k, 1]) + abs(Q[k, 2])
+        if tot < FAST_LIMIT:
             _tau_columns(th, C[0], C[1], C[2], C[3], C[4], C[5], C[6], C[7], l2, g0, C[8], C[9], C[10], m)
             for i in range(m):
                 out[b0 + i, 0] = C[8, i]; out[b0 + i, 1] = C[9, i]; out[b0 + i, 2] = C[10, i]
