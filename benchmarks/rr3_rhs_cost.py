@@ -1,0 +1,104 @@
+"""Where the 3R's robust continuous run spends its time: ``python benchmarks/rr3_rhs_cost.py``.
+
+The compiled engine's right-hand side of the paper's robust-perturbed loop, and its parts, each
+called 10^6 times from a compiled loop (no Python in between; best of 3): the whole
+``closed_loop_rhs``, the law (``control``: regressor, Y^T r, the eq. 6 term, Y theta), the plant's
+forward dynamics, the reference trajectory. Then the 10 s run with each Rosenbrock method and
+Jacobian policy: steps, rejected steps, right-hand sides, wall time (``SimResult``). The numbers
+of docs/performance.md ("Not met") come from this script.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+from numba import njit
+
+
+def main() -> None:
+    from rc3r.plants import as_plant
+    from rc3r.simulate import _initial_state, simulate
+    from rc3r.study import build_run
+    from rc3r.trajectory import reference_into
+
+    spec = build_run(controller="robust", perturbed=True, duration=10.0)
+    p = spec.plant
+    eng = p.fast_engine
+    mod = eng.instance
+    cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
+    kc, fx = eng.constants(p), as_plant(p).pack()
+    x0 = _initial_state(3, spec.law, spec.trajectory, None)
+    ctl, fd, mk, rhs, fr = mod.control, mod._fd, mod._make_work, mod.closed_loop_rhs, mod._friction
+
+    @njit
+    def loop_rhs(N, x, kc, fx, law, cp, tp, n):
+        p_ = int(cp[0]); wk = mk(kc); fric = fr(fx, n)
+        xdot = np.empty(x.shape[0]); u = np.empty(n); ref = np.empty((6, n)); Y = np.empty((n, p_))
+        xi = np.empty(p_); v = np.empty(n); a = np.empty(n); r = np.empty(n); w = np.empty(n); ys = np.empty(1)
+        s = 0.0
+        for k in range(N):
+            rhs(k * 1e-6, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys)
+            s += xdot[3]
+        return s
+
+    @njit
+    def loop_law(N, x, kc, fx, law, cp, tp, n):
+        p_ = int(cp[0]); wk = mk(kc)
+        xdot = np.empty(x.shape[0]); u = np.empty(n); ref = np.empty((6, n)); Y = np.empty((n, p_))
+        xi = np.empty(p_); v = np.empty(n); a = np.empty(n); r = np.empty(n); w = np.empty(n)
+        reference_into(tp, 0.1, ref)
+        q = x[0:n]; qd = x[n:2 * n]; z = x[2 * n:]; zd = xdot[2 * n:]
+        s = 0.0
+        for k in range(N):
+            s += ctl(law, cp, q, qd, z, ref, kc, wk, u, zd, Y, xi, v, a, r, w)
+        return s
+
+    @njit
+    def loop_plant(N, x, kc, fx, law, cp, tp, n):
+        wk = mk(kc); tau = np.ones(n); qdd = np.empty(n); s = 0.0
+        q = x[0:n]; qd = x[n:2 * n]
+        for k in range(N):
+            fd(kc, q, qd, tau, qdd, wk)
+            s += qdd[0]
+        return s
+
+    @njit
+    def loop_reference(N, x, kc, fx, law, cp, tp, n):
+        ref = np.empty((6, n)); s = 0.0
+        for k in range(N):
+            reference_into(tp, k * 1e-6, ref)
+            s += ref[0, 1]
+        return s
+
+    N = 1_000_000
+    args = (x0, kc, fx, code, cp, tp, 3)
+    print("right-hand side of the 3R's robust-perturbed loop, per call (compiled loop of 1e6, best of 3):")
+    for name, f in (("closed_loop_rhs", loop_rhs), ("law (control)", loop_law),
+                    ("plant forward dynamics", loop_plant), ("reference trajectory", loop_reference)):
+        f(10, *args)
+        best = min(_timed(f, N, args) for _ in range(3))
+        print(f"  {name:24s} {best / N * 1e9:7.1f} ns")
+    opts = replace(spec.options, engine="fast")
+    simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01, method="ros4"))
+    simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01))
+    print("\n10 s robust-perturbed, rtol 1e-6, atol 1e-8 (best of 3 walls):")
+    print(f"  {'method':8s} {'J kept':>6s} {'steps':>7s} {'rejected':>8s} {'rhs':>7s} {'rhs/step':>8s} {'wall':>8s}")
+    for method in ("ode23s", "ros4"):
+        for jr in (1, 5):
+            runs = [simulate(spec.plant, spec.law, spec.trajectory, replace(opts, method=method, jac_reuse=jr))
+                    for _ in range(3)]
+            r = min(runs, key=lambda x: x.wall_time_s)
+            tries = r.steps + r.rejected_steps
+            print(f"  {method:8s} {jr:6d} {r.steps:7d} {r.rejected_steps:8d} {r.rhs_evals:7d} "
+                  f"{r.rhs_evals / tries:8.2f} {r.wall_time_s * 1e3:6.0f} ms")
+
+
+def _timed(f, N, args) -> float:
+    t0 = time.perf_counter()
+    f(N, *args)
+    return time.perf_counter() - t0
+
+
+if __name__ == "__main__":
+    main()
