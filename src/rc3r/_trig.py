@@ -14,8 +14,10 @@ with ``k = round(2 x / pi)``, ``y`` by Cody and Waite's reduction on a three-par
 the minimax polynomials of fdlibm's ``__kernel_sin`` and ``__kernel_cos`` (FreeBSD msun
 ``k_sin.c``, ``k_cos.c``, ``e_rem_pio2.c``: same coefficients; error below one ulp on
 ``|y| <= pi / 4``). Outside ``|x| < 10^5`` (a joint angle never is; NaN and infinity included) it
-calls libm. (The trajectory keeps libm: the cold start runs it interpreted, and an
-interpreted call of this compiled function would compile it.) :func:`sincos_fast` is the same without that test and without a branch, for loops
+calls libm. The batch tau (:func:`rc3r.robots.rr3.kernels.inverse_dynamics_batch`) uses it; the
+per-state path of the simulators and the trajectory keep libm (the chattering eps = 0.05 runs
+amplify a last-bit difference of a sine into a different torque peak, and the cold start runs the
+trajectory interpreted, where a call of this compiled function would compile it). :func:`sincos_fast` is the same without that test and without a branch, for loops
 over many states that LLVM runs in SIMD lanes (the caller checks the range first:
 :func:`rc3r.robots.rr3.kernels.inverse_dynamics_batch`). Measured error against libm:
 ``tests/test_trig.py`` (at most 2 ulp of max(1, |result|)).

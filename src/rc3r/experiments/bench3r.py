@@ -55,7 +55,6 @@ times extrapolated to 10 s) but mean little at that size.
 from __future__ import annotations
 
 import datetime as _dt
-import math
 import os
 import platform
 import time
@@ -63,6 +62,7 @@ import time
 import numpy as np
 from numba import njit
 
+from .._trig import sincos
 from ..robots.rr3 import kernels as K
 
 __all__ = ["run_bench", "TARGETS"]
@@ -104,25 +104,25 @@ def _slotine_li_in_loop(th, Q, QD, V, A, l2, g0, out):
 
 @njit(**_JIT)
 def _trig_in_loop(Q, out):
-    """The closed form's trigonometry alone on the per-state path (:func:`.kernels._trig`: two
-    :func:`rc3r._trig.sincos` per state, range-checked, not in SIMD lanes)."""
+    """The closed form's angles through :func:`rc3r._trig.sincos`, one state at a time (range-checked,
+    not in SIMD lanes): what one reduction per angle saves on its own."""
+    for n in range(Q.shape[0]):
+        s2, c2 = sincos(Q[n, 1])
+        s3, c3 = sincos(Q[n, 2])
+        out[n, 0] = s2 + c2
+        out[n, 1] = s3 + c3
+        out[n, 2] = (s2 * c3 + c2 * s3) + (c2 * c3 - s2 * s3)
+
+
+@njit(**_JIT)
+def _libm_trig_in_loop(Q, out):
+    """The same angles through the per-state path's four libm calls (:func:`.kernels._trig`; numba's
+    vector math SVML is off here: the llvmlite wheel is not SVML-patched)."""
     for n in range(Q.shape[0]):
         s2, c2, s3, c3, s23, c23 = K._trig(Q[n, 1], Q[n, 2])
         out[n, 0] = s2 + c2
         out[n, 1] = s3 + c3
         out[n, 2] = s23 + c23
-
-
-@njit(**_JIT)
-def _libm_trig_in_loop(Q, out):
-    """The same angles through four libm calls (what :func:`.kernels._trig` was; numba's vector math
-    SVML is off here: the llvmlite wheel is not SVML-patched)."""
-    for n in range(Q.shape[0]):
-        s2 = math.sin(Q[n, 1]); c2 = math.cos(Q[n, 1])
-        s3 = math.sin(Q[n, 2]); c3 = math.cos(Q[n, 2])
-        out[n, 0] = s2 + c2
-        out[n, 1] = s3 + c3
-        out[n, 2] = (s2 * c3 + c2 * s3) + (c2 * c3 - s2 * s3)
 
 
 @njit(**_JIT)
@@ -266,9 +266,9 @@ def bench_ops(n: int, repeats: int) -> tuple[dict, dict, dict]:
         ("inverse_dynamics compiled", lambda: K.inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out3),
          "same, compiled loop called directly (no wrapper, output preallocated)", "pin.rnea loop"),
         ("sincos scalar compiled", lambda: _trig_in_loop(Q, out3a),
-         "the model's trigonometry per state on the simulator's scalar path (2 rc3r._trig.sincos)", "pin.rnea loop"),
+         "the model's angles through 2 rc3r._trig.sincos per state, one state at a time", "pin.rnea loop"),
         ("libm trig compiled", lambda: _libm_trig_in_loop(Q, out3a),
-         "the same angles by 4 libm sin/cos per state (the kernels' trigonometry before)", "pin.rnea loop"),
+         "the same angles by 4 libm sin/cos per state (the per-state path's kernels._trig)", "pin.rnea loop"),
         ("slotine_li_regressor batch", lambda: reg.slotine_li_regressor(Q, QD, V, A, l2=l2, g0=g0),
          "Y(q,qd,v,a) materialized (N,3,15)", "pin.rnea loop"),
         ("slotine_li compiled", lambda: _slotine_li_in_loop(th, Q, QD, V, A, l2, g0, out3b),

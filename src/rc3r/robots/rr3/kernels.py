@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
-import numpy as np
-
-from ..._trig import FAST_LIMIT, sincos, sincos_fast
+from ..._trig import FAST_LIMIT, sincos_fast
 
 _JIT = dict(cache=True, nogil=True, fastmath=False)
 
@@ -28,9 +27,14 @@ _INLINE = dict(_JIT, inline="always")
 
 @njit(**_INLINE)
 def _trig(q2, q3):
-    """(s2, c2, s3, c3, s23, c23); sin/cos(q2 + q3) by the addition theorem (two :func:`~rc3r._trig.sincos`)."""
-    s2, c2 = sincos(q2)
-    s3, c3 = sincos(q3)
+    """(s2, c2, s3, c3, s23, c23); sin/cos(q2 + q3) by the addition theorem (4 libm calls).
+
+    The per-state path (the simulators, the model functions) keeps libm: the chattering runs of the
+    paper's eps = 0.05 amplify a last-bit change of the sines into a different torque peak (7 % on
+    ``rc3r paper``'s 100 kHz row with :func:`rc3r._trig.sincos`), and the stored baseline holds
+    libm's. The batch :func:`inverse_dynamics_batch` takes :func:`rc3r._trig.sincos_fast`."""
+    s2 = math.sin(q2); c2 = math.cos(q2)
+    s3 = math.sin(q3); c3 = math.cos(q3)
     return s2, c2, s3, c3, s2 * c3 + c2 * s3, c2 * c3 - s2 * s3
 
 
