@@ -101,10 +101,10 @@ class SimOptions:
         runs about 2x faster and the robust runs 1.0-1.3x, at the same accuracy against
         a tight SciPy Radau solution (``rc3r bench``, docs/performance.md).
     method : {"ros4", "ode23s"}
-        Fast engine, continuous mode: the Rosenbrock method (:data:`METHODS`). ``"ros4"``
-        (default): Hairer & Wanner's L-stable order-4 method with an order-3 error estimate;
-        ``"ode23s"``: Shampine & Reichelt's order-2 pair (MATLAB's ode23s, the default before
-        2026-12-02). The python and reference engines use SciPy and ignore it.
+        Fast engine, continuous mode: the Rosenbrock method (:data:`METHODS`). ``"ode23s"``
+        (default): Shampine & Reichelt's order-2 pair (MATLAB's ode23s); ``"ros4"``: Hairer &
+        Wanner's L-stable order-4 method with an order-3 error estimate (give it ``jac_reuse = 1``:
+        it is not a W-method). The python and reference engines use SciPy and ignore it.
     max_steps : float
         Work budget of continuous mode: integrator steps (accepted and rejected) per
         simulated second. The fast engine checks it inside the compiled loop (per 0.5 s

@@ -206,9 +206,9 @@ class CompiledSimulator:
         return all(ready(f) for f in funcs)
 
     def continuous(self, rigid, fx, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
-                   max_steps, kc=None, method=1):
+                   max_steps, kc=None, method=0):
         """``kc``: :meth:`constants` of ``rigid`` if already packed (a run packs them once for all its chunks);
-        ``method``: a code of :data:`rc3r.simulate.METHODS`."""
+        ``method``: a code of :data:`rc3r.simulate.METHODS` (default 0, ode23s, as ``SimOptions``)."""
         kc = self.constants(rigid) if kc is None else kc
         return self.instance.integrate_continuous(x0, t_out, kc, fx, code, cp, tp, rtol, atol, h0,
                                                   hmax, lim, X, U, R, yn, jac_reuse, max_steps, int(method))

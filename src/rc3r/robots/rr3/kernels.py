@@ -114,14 +114,27 @@ def gravity_into(th, q, l2, g0, g):
 
 
 @njit(**_INLINE)
-def _dynamics_terms(th, q2, q3, qd1, qd2, qd3, l2, g0):
-    """M entries and h = S qd + g at one state: (m11, m12, m13, m22, m23, h1, h2, h3)."""
-    s2, c2, s3, c3, s23, c23 = _trig(q2, q3)
+def _terms_from_trig(th, s2, c2, s3, c3, s23, c23, qd1, qd2, qd3, l2, g0):
+    """M entries and h = S qd + g from the state's sines: (m11, m12, m13, m22, m23, h1, h2, h3)."""
     m11, m12, m13, m22, m23 = _inertia_terms(th, s2, c2, s3, c3, s23, c23)
     A, B, D, E, F = _christoffel_terms(th, s2, c2, s3, c3, s23, c23)
     c1, c2_, c3_ = _coriolis_vector(A, B, D, E, F, qd1, qd2, qd3)
     g2, g3 = _gravity_terms(th, s2, c2, s23, c23, l2, g0)
     return m11, m12, m13, m22, m23, c1, c2_ + g2, c3_ + g3
+
+
+@njit(**_INLINE)
+def _dynamics_terms(th, q2, q3, qd1, qd2, qd3, l2, g0):
+    """M entries and h = S qd + g at one state: (m11, m12, m13, m22, m23, h1, h2, h3)."""
+    s2, c2, s3, c3, s23, c23 = _trig(q2, q3)
+    return _terms_from_trig(th, s2, c2, s3, c3, s23, c23, qd1, qd2, qd3, l2, g0)
+
+
+@njit(**_INLINE)
+def _tau(th, m11, m12, m13, m22, m23, h1, h2, h3, a1, a2, a3):
+    """tau = M a + h (m33 = theta13)."""
+    return (m11 * a1 + m12 * a2 + m13 * a3 + h1, m12 * a1 + m22 * a2 + m23 * a3 + h2,
+            m13 * a1 + m23 * a2 + th[12] * a3 + h3)
 
 
 @njit(**_INLINE)
@@ -269,15 +282,9 @@ def _tau_columns(th, q2, q3, qd1, qd2, qd3, a1, a2, a3, l2, g0, t1, t2, t3, m):
     for n in range(m):
         s2, c2 = sincos_fast(q2[n])
         s3, c3 = sincos_fast(q3[n])
-        s23 = s2 * c3 + c2 * s3
-        c23 = c2 * c3 - s2 * s3
-        m11, m12, m13, m22, m23 = _inertia_terms(th, s2, c2, s3, c3, s23, c23)
-        A, B, D, E, F = _christoffel_terms(th, s2, c2, s3, c3, s23, c23)
-        c1, c2_, c3_ = _coriolis_vector(A, B, D, E, F, qd1[n], qd2[n], qd3[n])
-        g2, g3 = _gravity_terms(th, s2, c2, s23, c23, l2, g0)
-        t1[n] = m11 * a1[n] + m12 * a2[n] + m13 * a3[n] + c1
-        t2[n] = m12 * a1[n] + m22 * a2[n] + m23 * a3[n] + c2_ + g2
-        t3[n] = m13 * a1[n] + m23 * a2[n] + th[12] * a3[n] + c3_ + g3
+        m11, m12, m13, m22, m23, h1, h2, h3 = _terms_from_trig(th, s2, c2, s3, c3, s2 * c3 + c2 * s3,
+                                                               c2 * c3 - s2 * s3, qd1[n], qd2[n], qd3[n], l2, g0)
+        t1[n], t2[n], t3[n] = _tau(th, m11, m12, m13, m22, m23, h1, h2, h3, a1[n], a2[n], a3[n])
 
 
 @njit(**_JIT)
@@ -308,7 +315,5 @@ def inverse_dynamics_batch(th, Q, QD, QDD, l2, g0, out):
         for n in range(b0, b0 + m):
             m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, Q[n, 1], Q[n, 2], QD[n, 0], QD[n, 1],
                                                                   QD[n, 2], l2, g0)
-            a1 = QDD[n, 0]; a2 = QDD[n, 1]; a3 = QDD[n, 2]
-            out[n, 0] = m11 * a1 + m12 * a2 + m13 * a3 + h1
-            out[n, 1] = m12 * a1 + m22 * a2 + m23 * a3 + h2
-            out[n, 2] = m13 * a1 + m23 * a2 + th[12] * a3 + h3
+            out[n, 0], out[n, 1], out[n, 2] = _tau(th, m11, m12, m13, m22, m23, h1, h2, h3,
+                                                   QDD[n, 0], QDD[n, 1], QDD[n, 2])
