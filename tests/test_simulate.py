@@ -70,6 +70,16 @@ def test_ros4_is_fourth_order_accurate_where_ode23s_is_second(plant, bounds, tab
     assert r4.ok and np.abs(r4.q - ref.q).max() <= 5e-9
 
 
+def test_method_codes_are_the_templates():
+    """rc3r.simulate.METHODS (the names SimOptions takes) maps each name to the compiled template's
+    own code for that method (engines.compiled.ODE23S, ROS4): the two are written in two modules."""
+    from rc3r.simulate import METHODS
+    from rc3r.simulate.engines import compiled
+
+    assert METHODS == {"ode23s": compiled.ODE23S, "ros4": compiled.ROS4}
+    assert compiled.ODE23S != compiled.ROS4
+
+
 def test_bad_method_is_refused():
     """SimOptions(method=...) outside rc3r.simulate.METHODS: one ParameterError naming the choices."""
     with pytest.raises(ParameterError, match="method must be one of ros4, ode23s"):
