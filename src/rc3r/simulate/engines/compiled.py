@@ -199,6 +199,50 @@ def _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, 
 
 
 @njit(**_JIT)
+def _ode23s_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u, ref, Y, xi, v, a, r, w, ys,
+                   k1, k2, k3, tmp, xnew, rtol, atol):
+    """One ode23s step (Shampine & Reichelt 1997; a W-method of order 2, so a kept J keeps the order)
+    from (t, x) of size h (F0 = f(t, x), J, Ft at (t, x)): fills ``xnew`` and ``F2 = f(t + h, xnew)``
+    (``u``, ``ys`` there). Returns ``(status, err, n_f)`` as :func:`_ros4_stages`: status 0, 1 if the
+    plant's M was not PD at the midpoint or at xnew, 2 if W is singular; err the scaled RMS estimate."""
+    n = x.shape[0]
+    d = 1.0 / (2.0 + math.sqrt(2.0))
+    e32 = 6.0 + math.sqrt(2.0)
+    hd = h * d
+    for i in range(n):
+        for j in range(n):
+            W[i, j] = -hd * J[i, j]
+        W[i, i] += 1.0
+    if not _lu_factor(W, piv):
+        return 2, 1e300, 0
+    for i in range(n):
+        k1[i] = F0[i] + hd * Ft[i]
+    _lu_solve(W, piv, k1)
+    for i in range(n):
+        tmp[i] = x[i] + 0.5 * h * k1[i]
+    ok1 = closed_loop_rhs(t + 0.5 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
+    for i in range(n):
+        k2[i] = F1[i] - k1[i]
+    _lu_solve(W, piv, k2)
+    for i in range(n):
+        k2[i] += k1[i]
+        xnew[i] = x[i] + h * k2[i]
+    ok2 = closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys)
+    for i in range(n):
+        k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
+    _lu_solve(W, piv, k3)
+    err = 0.0  # RMS norm of the scaled error estimate (Hairer & Wanner; SciPy's solve_ivp)
+    for i in range(n):
+        sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
+        ei = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]) / sc
+        err += ei * ei
+    err = math.sqrt(err / n)
+    if not (ok1 and ok2):
+        return 1, err, 2
+    return 0, err, 2
+
+
+@njit(**_JIT)
 def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, lim,
                          X, U, R, ynorm, jac_reuse, max_steps, method):
     """Integrate from ``t_out[0]``; store x, u, q_d rows at every ``t_out`` (n joints: ``U.shape[1]``).
@@ -211,13 +255,11 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     The Jacobian is recomputed every ``jac_reuse`` accepted steps and after any
     rejected step taken with an older one (``jac_reuse = 1``: every step, as ode23s).
     ``method``: :data:`ODE23S` (order 2, error estimate of order 3) or :data:`ROS4` (order 4,
-    embedded order 3: :func:`_ros4_stages`); both evaluate f at the new state before accepting it.
+    embedded order 3: :func:`_ros4_stages`; ode23s: :func:`_ode23s_stages`); both evaluate f at the new state before accepting it.
     Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
     ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
     """
     n = x0.shape[0]
-    d = 1.0 / (2.0 + math.sqrt(2.0))
-    e32 = 6.0 + math.sqrt(2.0)
     x = x0.copy()
     xnew = np.empty(n)
     F0 = np.empty(n); F1 = np.empty(n); F2 = np.empty(n); Ft = np.empty(n); Fp = np.empty(n)
@@ -269,38 +311,13 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
                 ok1 = st4 == 0
                 ok2 = ok1
             else:
-                hd = h * d
-                for i in range(n):
-                    for j in range(n):
-                        W[i, j] = -hd * J[i, j]
-                    W[i, i] += 1.0
-                if not _lu_factor(W, piv):
+                st2, err, nf = _ode23s_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
+                                              ref, Y, xi, v, a, r, w, ys, k1, k2, k3, tmp, xnew, rtol, atol)
+                nrhs += nf
+                if st2 == 2:
                     return HMIN, k, nrhs, nsteps, nrej, t
-                for i in range(n):
-                    k1[i] = F0[i] + hd * Ft[i]
-                _lu_solve(W, piv, k1)
-                for i in range(n):
-                    tmp[i] = x[i] + 0.5 * h * k1[i]
-                ok1 = closed_loop_rhs(t + 0.5 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r,
-                                      w, ys)
-                for i in range(n):
-                    k2[i] = F1[i] - k1[i]
-                _lu_solve(W, piv, k2)
-                for i in range(n):
-                    k2[i] += k1[i]
-                    xnew[i] = x[i] + h * k2[i]
-                ok2 = closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w,
-                                      ys)
-                nrhs += 2
-                for i in range(n):
-                    k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
-                _lu_solve(W, piv, k3)
-                err = 0.0  # RMS norm of the scaled error estimate (Hairer & Wanner; SciPy's solve_ivp)
-                for i in range(n):
-                    sc = atol + rtol * max(abs(x[i]), abs(xnew[i]))
-                    ei = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]) / sc
-                    err += ei * ei
-                err = math.sqrt(err / n)
+                ok1 = st2 == 0
+                ok2 = ok1
             if not (err <= 1e300):  # NaN or overflow
                 err = 1e300
             if ok1 and ok2 and err <= 1.0:
