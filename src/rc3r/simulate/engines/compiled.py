@@ -254,8 +254,9 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
 
     The Jacobian is recomputed every ``jac_reuse`` accepted steps and after any
     rejected step taken with an older one (``jac_reuse = 1``: every step, as ode23s).
-    ``method``: :data:`ODE23S` (order 2, error estimate of order 3) or :data:`ROS4` (order 4,
-    embedded order 3: :func:`_ros4_stages`; ode23s: :func:`_ode23s_stages`); both evaluate f at the new state before accepting it.
+    ``method``: :data:`ODE23S` (order 2, error estimate of order 3: :func:`_ode23s_stages`) or
+    :data:`ROS4` (order 4, embedded order 3: :func:`_ros4_stages`); both evaluate f at the new state
+    before accepting it.
     Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
     ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
     """
@@ -303,24 +304,17 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             if nsteps + nrej >= max_steps:
                 return WORK, k, nrhs, nsteps, nrej, t
             if method == ROS4:
-                st4, err, nf = _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
+                st_, err, nf = _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
                                             ref, Y, xi, v, a, r, w, ys, k1, k2, k3, k4, tmp, xnew, rtol, atol)
-                nrhs += nf
-                if st4 == 2:
-                    return HMIN, k, nrhs, nsteps, nrej, t
-                ok1 = st4 == 0
-                ok2 = ok1
             else:
-                st2, err, nf = _ode23s_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
+                st_, err, nf = _ode23s_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
                                               ref, Y, xi, v, a, r, w, ys, k1, k2, k3, tmp, xnew, rtol, atol)
-                nrhs += nf
-                if st2 == 2:
-                    return HMIN, k, nrhs, nsteps, nrej, t
-                ok1 = st2 == 0
-                ok2 = ok1
+            nrhs += nf
+            if st_ == 2:  # W singular
+                return HMIN, k, nrhs, nsteps, nrej, t
             if not (err <= 1e300):  # NaN or overflow
                 err = 1e300
-            if ok1 and ok2 and err <= 1.0:
+            if st_ == 0 and err <= 1.0:
                 break
             nrej += 1
             last = False
