@@ -70,13 +70,14 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate._fast``                the compiled engine's driver: one instantiation per kernel supply
 ``rc3r.simulate.engines``              engines: the contract and registry, the compiled integrators
 ``rc3r.simulate.engines.base``         the engine contract, the registry (``ENGINES``), the built-in engines
-``rc3r.simulate.engines.compiled``     Rosenbrock (ode23s, ROS4) and ZOH RK4 integrators for any n, p (a numba template)
+``rc3r.simulate.engines.compiled``     Rosenbrock (ode23s, ROS4) and ZOH (RK4 or ROS4 periods) integrators, any n, p (numba)
 ``rc3r.simulate.engines._template``    the kernel supply contract, as stubs
 ``rc3r.simulate.engines._linalg``      dense LU of the compiled integrators (kernel-independent)
 ``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)
 ``rc3r.simulate.metrics``              scalar metrics of a run
 ``rc3r.simulate.verdict``              what a run means: clean, chattering, saturated, limit-violated, diverged
 ``rc3r.simulate.status``               status codes and the compiled bound check
+``rc3r.simulate.steps``                how a sampled run advances the plant: RK4 sub-steps, implicit periods
 ``rc3r.simulate.export``               a result as a table, CSV, figure, run directory
 ``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
 ``rc3r.export``                        ``rc3r export``: a run's controller as self-contained C99, with a checking harness

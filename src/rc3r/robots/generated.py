@@ -81,6 +81,7 @@ import numpy as np
 from ..errors import ConfigError, ParameterError
 from .base import stack_states
 from .generated_sym import _functions, _wrapper
+from .pinocchio_kernel import local_axis
 
 __all__ = ["GeneratedKernels", "FUNCTIONS", "DEFAULT_FLAGS", "default_cache_dir", "chain_constants"]
 
@@ -173,7 +174,7 @@ def chain_constants(model, where: str = "model") -> Chain:
     parent, revolute = np.empty(n, dtype=np.int64), np.empty(n, dtype=bool)
     R0, p0, axis, pi = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 10))
     for j in range(n):
-        S = np.array(pin.getJointJacobian(model, data, j + 1, pin.LOCAL)[:, model.idx_vs[j + 1]])
+        S = local_axis(model, data, j + 1)
         rev = bool(np.linalg.norm(S[3:]) > 0.5)
         if np.linalg.norm(S[:3] if rev else S[3:]) > 1e-12:
             raise ParameterError(f"{where}: joint {j + 1} '{model.names[j + 1]}' ({model.joints[j + 1].shortname()}) "

@@ -412,6 +412,15 @@ def _align(u) -> np.ndarray:
     return np.column_stack([x, np.cross(u, x), u])
 
 
+
+def local_axis(model, data, j: int) -> np.ndarray:
+    """Joint ``j``'s motion subspace (6,) in its own frame (Pinocchio's LOCAL Jacobian column; ``data`` after
+    ``computeJointJacobians``). A one-DoF model's Jacobian comes back from Pinocchio as a vector, hence
+    the reshape."""
+    import pinocchio as pin
+
+    return np.asarray(pin.getJointJacobian(model, data, j, pin.LOCAL)).reshape(6, model.nv)[:, model.idx_vs[j]].copy()
+
 class ChainKernel:
     """The compiled regressor for one kinematic structure (constants read from a ``pinocchio.Model``).
 
@@ -441,7 +450,7 @@ class ChainKernel:
         pin.computeJointJacobians(model, data, pin.neutral(model))
         for j in range(n):
             placement = model.jointPlacements[j + 1]
-            Sl = np.array(pin.getJointJacobian(model, data, j + 1, pin.LOCAL)[:, model.idx_vs[j + 1]])
+            Sl = local_axis(model, data, j + 1)
             rev = bool(np.linalg.norm(Sl[3:]) > 0.5)  # motion subspace (0, u) or (u, 0)
             self.supported &= bool(np.linalg.norm(Sl[:3] if rev else Sl[3:]) < 1e-12)
             self.geo[j] = np.concatenate([np.ravel(placement.rotation), placement.translation, Sl[3:] if rev else Sl[:3]])

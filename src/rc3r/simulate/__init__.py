@@ -46,9 +46,11 @@ import numpy as np
 from ..errors import DivergenceError, ParameterError
 from . import status as S
 from .engines.base import engine_names as _engine_names
+from .steps import (EFFECT_SUBSTEP_S, MAX_STEP_ANGLE, RIGID_SUBSTEP_S, STIFF_STEP, _resolve_steps, _steps,  # noqa: F401
+                    _too_fast, default_substeps, plant_method, stiffness)
 
 __all__ = ["SimOptions", "SimResult", "simulate", "ENGINES", "METHODS", "planned_engine", "default_substeps",
-           "stiffness"]
+           "stiffness", "plant_method", "SAMPLED_METHODS"]
 
 #: Engines accepted by :class:`SimOptions`: ``"auto"`` and every name and alias of the engine registry
 #: (:mod:`rc3r.simulate.engines`; a live view: ``"auto", "fast", "compiled", "python", "reference"`` and
@@ -62,6 +64,9 @@ MAX_ROWS = 5_000_000
 #: The fast engine's continuous-time Rosenbrock methods: name -> code of
 #: :func:`rc3r.simulate.engines.compiled.integrate_continuous` (its ``ODE23S``, ``ROS4``).
 METHODS = {"ros4": 1, "ode23s": 0}
+
+#: Ways of advancing the plant over a sampling period (:attr:`SimOptions.sampled_method`).
+SAMPLED_METHODS = ("auto", "rk4", "ros4")
 
 #: Most controller samples of a sampled run (1e9 samples take hours even compiled).
 MAX_SAMPLES = 1_000_000_000
@@ -93,6 +98,14 @@ class SimOptions:
         from the plant (:func:`default_substeps`: steps of at most 1 ms for a rigid body, 0.25 ms
         with friction); :attr:`substeps` alone, without a plant, is the conservative
         ``ceil(T / 0.25 ms)``.
+    sampled_method : {"auto", "rk4", "ros4"}
+        How the plant is advanced over a sampling period under the held torque (sampled mode).
+        ``"rk4"``: :attr:`nsub` classical RK4 sub-steps. ``"ros4"``: adaptive L-stable Rosenbrock
+        steps at ``rtol``, ``atol`` (fast engine: ROS4, a Jacobian per step; python engine: SciPy's
+        Radau), for plants whose friction damps a light joint faster than RK4 can follow (the
+        xArm7's URDF damping: 738 sub-steps per 2 ms period). ``"auto"`` (default): ``"ros4"``
+        when ``nsub`` is not given and :func:`stiffness` limits the RK4 step below
+        :data:`EFFECT_SUBSTEP_S`, else ``"rk4"`` (:func:`plant_method`).
     engine : {"auto", "fast", "python", "reference"}
     jac_reuse : int
         Fast engine, continuous mode: accepted Rosenbrock steps one finite-difference
@@ -123,6 +136,7 @@ class SimOptions:
     rtol: float = 1e-6
     atol: float = 1e-8
     nsub: int | None = None
+    sampled_method: str = "auto"
     engine: str = "auto"
     jac_reuse: int = 5
     method: str = "ode23s"
@@ -154,6 +168,9 @@ class SimOptions:
             raise ParameterError(f"jac_reuse must be an integer in [1, 1000], got {self.jac_reuse!r}")
         if not isinstance(self.method, str) or self.method not in METHODS:
             raise ParameterError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if not isinstance(self.sampled_method, str) or self.sampled_method not in SAMPLED_METHODS:
+            raise ParameterError(f"sampled_method must be one of {', '.join(SAMPLED_METHODS)}, "
+                                 f"got {self.sampled_method!r}")
         if not isinstance(self.engine, str) or self.engine not in ENGINES:
             raise ParameterError(f"engine must be one of {', '.join(ENGINES)}, got {self.engine!r}")
         rows = self.duration * (self.output_rate if self.rate is None else min(self.rate, self.output_rate))
@@ -303,8 +320,7 @@ def planned_engine(plant, law, options: SimOptions) -> tuple[str, str | None]:
     from .engines import ENGINES
 
     plant = as_plant(plant)
-    if options.rate is not None and options.nsub is None:
-        options = replace(options, nsub=default_substeps(plant, options.rate))
+    options = _resolve_steps(plant, options)
     name = _engine(plant, law, options)
     why = None
     if options.engine == "auto":
@@ -389,8 +405,7 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     plant = as_plant(plant)
     model = plant.rigid if model is None else model
     auto_step = options.rate is not None and options.nsub is None
-    if auto_step:
-        options = replace(options, nsub=default_substeps(plant, options.rate))
+    options = _resolve_steps(plant, options)
     _check_structure(plant, model, law, trajectory, loop, options)
     if x0 is None and loop is not None:
         x0 = loop.x0(*trajectory.evaluate(0.0)[:2])
@@ -406,96 +421,13 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     t0 = time.perf_counter()
     out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
     careful = _steps(options.rate, EFFECT_SUBSTEP_S) if auto_step else 0
-    if auto_step and options.nsub < careful and _too_fast(out, options):  # violent motion: the step is redone
+    rk4 = options.sampled_method == "rk4"
+    if auto_step and rk4 and options.nsub < careful and _too_fast(out, options):  # violent motion: redo the step
         options = replace(options, nsub=careful)
         S.raise_if_stopped()
         out = run(plant, law, trajectory, replace(options, engine=engine), x0, loop, model)
     wall = time.perf_counter() - t0
     return replace(out, wall_time_s=wall, loop=None if loop is None else loop.describe())
-
-
-#: Longest RK4 sub-step [s] of a sampled run whose plant adds no state-dependent force to the rigid
-#: body (no effect, or only torque saturation and limit monitors). Measured 2026-12-02 against the
-#: reference engine (DOP853 per period, rtol 1e-11), robust law at 1 kHz over 2 s with a payload: one
-#: 1 ms step per period is within 6.5e-13 rad (UR5), 1.6e-11 (Panda), 6.5e-12 (Z1) and 4.6e-12
-#: (double pendulum) of it (``tests/test_simulate.py::test_one_rk4_step_per_ms_matches_the_reference``).
-RIGID_SUBSTEP_S = 1e-3
-#: Longest RK4 sub-step [s] when an effect adds a state-dependent force (friction: its smooth Coulomb
-#: term is stiff; strong Coulomb friction needs still smaller steps, docs/control.md "Simulation").
-EFFECT_SUBSTEP_S = 2.5e-4
-#: Largest ``h lambda`` of a default RK4 sub-step ``h`` against the effects' damping rate ``lambda``
-#: (:func:`stiffness`): RK4's factor on ``exp(-h lambda)`` at 1.0 is 0.375 against 0.368 (stable to 2.79).
-STIFF_STEP = 1.0
-#: Effects that leave the rigid body's forces as they are (they act on the held torque or only watch).
-_NON_STIFF = ("saturation", "limits")
-
-
-#: Largest joint angle [rad] a default RK4 sub-step may cover (``max |qd| * h``) before a sampled run is
-#: redone with :data:`EFFECT_SUBSTEP_S` steps: a run whose motion turns violent (the eq. 7 law with a
-#: thin layer at 1 kHz reaches |qd| ~ 1450 rad/s and 1e7 N m on the 3R) needs the finer step (1 ms
-#: steps made it diverge; 0.25 ms ones agree with the reference engine, max|e| 1.2683 rad).
-MAX_STEP_ANGLE = 0.02
-
-
-def _too_fast(res, opt: SimOptions) -> bool:
-    """True if a sampled run on default sub-steps did not end ``ok`` or moved more than
-    :data:`MAX_STEP_ANGLE` per sub-step (then :func:`simulate` redoes it with finer steps)."""
-    if res.status != "ok":
-        return res.status != "interrupted"
-    h = (1.0 / opt.rate) / opt.substeps
-    qd = np.abs(np.asarray(res.qd, dtype=float))
-    return bool(qd.size and np.nanmax(qd) * h > MAX_STEP_ANGLE)
-
-
-def default_substeps(plant, rate: float) -> int:
-    """RK4 sub-steps per period of a sampled run on ``plant`` at ``rate`` [Hz] when ``SimOptions.nsub``
-    is not given: steps of at most :data:`RIGID_SUBSTEP_S` for a rigid body (with saturation or limit
-    monitors), :data:`EFFECT_SUBSTEP_S` when another effect (friction) acts, and at most
-    :data:`STIFF_STEP` / :func:`stiffness` when the effects' damping is stiffer than that.
-    :func:`simulate` redoes a run on the longer step with :data:`EFFECT_SUBSTEP_S` steps when it did
-    not end ``ok`` or moved more than :data:`MAX_STEP_ANGLE` per step."""
-    from ..plants import as_plant
-
-    plant = as_plant(plant)
-    effects = getattr(plant, "effects", ())
-    h = RIGID_SUBSTEP_S if all(getattr(e, "name", "?") in _NON_STIFF for e in effects) else EFFECT_SUBSTEP_S
-    lam = stiffness(plant)
-    if lam > 0:
-        h = min(h, STIFF_STEP / lam)
-    return _steps(rate, h)
-
-
-def stiffness(plant, q=None) -> float:
-    r"""The fastest rate [1/s] at which the plant's effects damp a joint velocity:
-
-    .. math:: \lambda_{\max}\bigl(M(q)^{-1} D\bigr), \qquad D = \operatorname{diag}\Bigl(\sum_e d_e\Bigr),
-
-    ``d_e`` the largest slope of effect ``e``'s torque in ``qd`` (:meth:`rc3r.plants.Effect.damping`;
-    friction: ``F_v + F_c / v_s``), ``M`` the rigid body's mass matrix at ``q`` (default: zero). 0 if no
-    effect damps. Explicit RK4 is stable on ``-lambda`` for ``h lambda < 2.79``; :func:`default_substeps`
-    keeps ``h lambda <= STIFF_STEP``. Example: the xArm7's URDF damping, 10 N m s/rad on a wrist of
-    1.4e-4 kg m^2, gives about 7e4 1/s (a 14 us time constant).
-    """
-    from ..plants import as_plant
-
-    plant = as_plant(plant)
-    slopes = [d for d in (getattr(e, "damping", lambda: None)() for e in getattr(plant, "effects", ()))
-              if d is not None]
-    if not slopes:
-        return 0.0
-    D = np.sum(np.atleast_2d(np.asarray(slopes, dtype=float)), axis=0)
-    if not np.any(D > 0):
-        return 0.0
-    from scipy.linalg import eigh
-
-    rigid = plant.rigid
-    M = np.asarray(rigid.mass_matrix(np.zeros(rigid.n) if q is None else np.asarray(q, dtype=float)))
-    return float(np.max(eigh(np.diag(D), M, eigvals_only=True)))
-
-
-def _steps(rate: float, h: float) -> int:
-    """RK4 sub-steps of at most ``h`` [s] in one period of ``rate`` [Hz] (at least one)."""
-    return max(1, int(np.ceil((1.0 / float(rate)) / h - 1e-9)))
 
 
 _WARMED: set = set()

@@ -214,10 +214,13 @@ class CompiledSimulator:
                                                   hmax, lim, X, U, R, yn, jac_reuse, max_steps, int(method))
 
     def sampled(self, rigid, fx, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv, noise, quant,
-                ubuf, kc=None):
+                ubuf, kc=None, stiff=False, rtol=1e-6, atol=1e-8, budget=1000):
+        """``stiff``: advance the plant by adaptive ROS4 steps (``rtol``, ``atol``, at most ``budget`` per
+        period) instead of ``nsub`` RK4 sub-steps (``SimOptions.sampled_method``)."""
         kc = self.constants(rigid) if kc is None else kc
         return self.instance.integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, code, cp,
-                                               tp, lim, X, U, R, yn, tv, noise, quant, ubuf)
+                                               tp, lim, X, U, R, yn, tv, noise, quant, ubuf, bool(stiff),
+                                               float(rtol), float(atol), int(budget))
 
 
 def run(plant, law, trajectory, opt, x0, loop=None, model=None):
@@ -268,13 +271,16 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     quant = loop.quantization if loop is not None else np.zeros(n)
     ubuf = np.zeros(((loop.delay if loop is not None else 0) + 1, n))  # the delay line, across chunks
     per = max(1, int(round(CHUNK_S * opt.rate)) // dec) * dec  # samples per call, a multiple of dec
+    stiff = opt.sampled_method == "ros4"
+    budget = max(100, int(np.ceil(opt.max_steps * Ts)))  # ROS4 steps per period: max_steps per second
     s0, row, stored, st, t_end, nrhs_all, done = 0, 0, 0, S.OK, 0.0, 0, 0
     try:
         while True:
             k = min(per, nsamples - s0)
             st_k, m, nrhs, ndone, t_k = eng.sampled(
                 rigid, fx, code, cp, tp, X[row].copy(), s0, Ts, k, dec, opt.substeps, lim,
-                X[row:], U[row:], R[row:], yn[row:], tv, noise, quant, ubuf, kc=kc)
+                X[row:], U[row:], R[row:], yn[row:], tv, noise, quant, ubuf, kc=kc, stiff=stiff,
+                rtol=opt.rtol, atol=opt.atol, budget=budget)
             nrhs_all += nrhs
             stored, st, t_end, done = row + m, st_k, t_k, s0 + ndone
             if st != S.OK or s0 + k >= nsamples:

@@ -7,7 +7,8 @@ sees only through its regressor. In sampled mode the controller gets the measure
 loop's effects (:mod:`rc3r.plants.loop`) and its torque goes through their delay line; a rigid
 body with an ``advance(q, qd, u, T)`` method (MuJoCo, :mod:`rc3r.plants.mujoco`) integrates
 the held torque itself (its own RK4 at a fine step) instead of this module's RK4. ``python``: SciPy ``Radau`` at the options'
-tolerances (continuous) or RK4 with ``nsub`` sub-steps per period (sampled).
+tolerances (continuous) or RK4 with ``nsub`` sub-steps per period (sampled; SciPy's Radau per period
+for ``SimOptions.sampled_method = "ros4"``, a stiff plant).
 ``reference``: ``Radau`` at ``rtol <= 1e-11`` (continuous) or ``DOP853`` per period
 (sampled).
 """
@@ -142,11 +143,11 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 q1, qd1 = advance(x[:n], x[n:2 * n], u, Ts)  # simulate() refused joint-torque effects
                 xs = np.concatenate([q1, qd1])
                 ok = bool(np.all(np.isfinite(xs)))
-            elif reference:
+            elif reference or opt.sampled_method == "ros4":
                 from scipy.integrate import solve_ivp  # here: importing SciPy's integrators costs ~1 s
 
-                sol = solve_ivp(lambda _t, y: ctl.plant_rhs(y, u), (t, t + Ts), x[:2 * n], method="DOP853",
-                                rtol=rtol, atol=atol)
+                sol = solve_ivp(lambda _t, y: ctl.plant_rhs(y, u), (t, t + Ts), x[:2 * n],
+                                method="DOP853" if reference else "Radau", rtol=rtol, atol=atol)
                 ok, xs = sol.success, (sol.y[:, -1] if sol.success else None)
             else:
                 xs = _rk4(ctl, x[:2 * n], u, h, opt.substeps)

@@ -16,7 +16,9 @@ State ``x = (q, qd, z)``: joint positions [rad], velocities [rad/s] and the cont
   an order-3 embedded solution, same Jacobian, step control and outputs.
 * :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and
   held (zero-order hold); the plant is integrated over each period by classical RK4
-  with ``nsub`` sub-steps; the controller state is updated by forward Euler.
+  with ``nsub`` sub-steps, or for a stiff plant by adaptive ROS4 steps on the plant alone
+  (:func:`_stiff_period`, ``SimOptions.sampled_method``); the controller state is updated by
+  forward Euler.
 
 The plant's effects (friction, saturation: the fields ``fx`` of
 :meth:`rc3r.plants.Plant.pack`) and the loop's (noise, quantization, delay line) are applied
@@ -107,18 +109,31 @@ def closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v,
 
 
 @njit(**_JIT)
-def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys):
-    """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x))."""
+def _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys):
+    """:func:`closed_loop_rhs`, or if ``plant_only`` the plant alone (:func:`_plant_rhs`, x = (q, qd)) under
+    the held torque ``u`` (read, not written; ``w`` is scratch). Returns False if the plant M is not PD."""
+    if plant_only:
+        return _plant_rhs(x, u, kc, wk, fx, fric, xdot, w)
+    return closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys)
+
+
+@njit(**_JIT)
+def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, plant_only=False):
+    """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x); ``plant_only``: f of
+    :func:`_f`, autonomous, so Ft = 0 without an evaluation). Returns the evaluations of f made."""
     n = x.shape[0]
     sqeps = math.sqrt(2.220446049250313e-16)
     for j in range(n):
         dx = sqeps * max(abs(x[j]), 1e-3)
         xj = x[j]
         x[j] = xj + dx
-        closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys)
+        _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys)
         x[j] = xj
         for i in range(n):
             J[i, j] = (Fp[i] - F0[i]) / dx
+    if plant_only:
+        Ft[:] = 0.0
+        return n
     dt = sqeps * max(abs(t), 1.0)
     closed_loop_rhs(t + dt, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys)
     for i in range(n):
@@ -151,11 +166,12 @@ _R4_GAMMA = (0.5728200000000000, -1.769193891319233, 0.7592633437920482, -0.1049
 
 @njit(**_JIT)
 def _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u, ref, Y, xi, v, a, r, w, ys,
-                 k1, k2, k3, k4, tmp, xnew, rtol, atol):
+                 k1, k2, k3, k4, tmp, xnew, rtol, atol, plant_only=False):
     """One ROS4 step from (t, x) of size h (F0 = f(t, x), J, Ft at (t, x)): fills ``xnew`` and, if the
     step is acceptable, ``F2 = f(t + h, xnew)`` (``u``, ``ys`` there). Returns ``(status, err, n_f)``:
     status 0, 1 if the plant's M was not PD at a stage or at xnew, 2 if G is singular; err the scaled
-    RMS error estimate (as :func:`integrate_continuous`'s); n_f the evaluations of f made."""
+    RMS error estimate (as :func:`integrate_continuous`'s); n_f the evaluations of f made. ``plant_only``:
+    f is the plant alone under the held ``u`` (:func:`_f`; sampled mode's stiff plants)."""
     n = x.shape[0]
     hg = 1.0 / (h * _R4_GAMMA[0])
     for i in range(n):
@@ -169,13 +185,13 @@ def _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, 
     _lu_solve(W, piv, k1)
     for i in range(n):
         tmp[i] = x[i] + _R4_A21 * k1[i]
-    ok1 = closed_loop_rhs(t + _R4_ALPHA2 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
+    ok1 = _f(plant_only, t + _R4_ALPHA2 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
     for i in range(n):
         k2[i] = F1[i] + _R4_C21 / h * k1[i] + h * _R4_GAMMA[1] * Ft[i]
     _lu_solve(W, piv, k2)
     for i in range(n):
         tmp[i] = x[i] + _R4_A31 * k1[i] + _R4_A32 * k2[i]
-    ok2 = closed_loop_rhs(t + _R4_ALPHA3 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
+    ok2 = _f(plant_only, t + _R4_ALPHA3 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
     for i in range(n):
         k3[i] = F1[i] + (_R4_C31 * k1[i] + _R4_C32 * k2[i]) / h + h * _R4_GAMMA[2] * Ft[i]
     _lu_solve(W, piv, k3)
@@ -192,7 +208,7 @@ def _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, 
     if not (ok1 and ok2):
         return 1, err, 2
     if err <= 1.0:  # f at the new state: the next step's F0, the outputs' u
-        if not closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys):
+        if not _f(plant_only, t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys):
             return 1, err, 3
         return 0, err, 3
     return 0, err, 2
@@ -375,8 +391,52 @@ def _plant_rhs(x, u, kc, wk, fx, fric, xdot, tau):
 
 
 @njit(**_JIT)
+def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V, J, W, piv,
+                  rtol, atol, budget):
+    """Advance the plant ``x = (q, qd)`` (2n,) in place over one period ``Ts`` under the held torque ``ua`` by
+    adaptive ROS4 steps (:func:`_ros4_stages` on the plant alone, a forward-difference Jacobian per step,
+    error control as :func:`integrate_continuous`'s): L-stable, so a friction that damps a light joint in
+    microseconds costs no more steps than the motion needs. ``hs[0]``: the step to try, carried from
+    period to period. ``V`` (11, 2n), ``J``, ``W`` (2n, 2n), ``piv``: scratch. At most ``budget`` steps.
+    Returns ``(status, n_f)``."""
+    F0, F1, F2, Ft, Fp = V[0], V[1], V[2], V[3], V[4]
+    k1, k2, k3, k4, tmp, xnew = V[5], V[6], V[7], V[8], V[9], V[10]
+    if not _plant_rhs(x, ua, kc, wk, fx, fric, F0, tau):
+        return NOTPD, 1
+    nf, steps, t, err = 1, 0, 0.0, 0.0
+    while t < Ts * (1.0 - 1e-12):
+        h = min(hs[0], Ts - t)
+        cut = h < hs[0]
+        nf += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, ua, ref, Y, xi, v, a, r, tau, ys, True)
+        while True:
+            steps += 1
+            if steps > budget:
+                return WORK, nf
+            st_, err, m = _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, ua, ref,
+                                       Y, xi, v, a, r, tau, ys, k1, k2, k3, k4, tmp, xnew, rtol, atol, True)
+            nf += m
+            if st_ == 2:
+                return HMIN, nf
+            if not (err <= 1e300):
+                err = 1e300
+            if st_ == 0 and err <= 1.0:
+                break
+            cut = False
+            h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** 0.25) if err < 1e300 else 0.1 * h
+            if h < 1e-14 * Ts:
+                return HMIN, nf
+        t = Ts if cut else t + h
+        for i in range(x.shape[0]):
+            x[i] = xnew[i]
+            F0[i] = F2[i]
+        hn = h * (5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** 0.25)))
+        hs[0] = max(hs[0], hn) if cut else hn
+    return OK, nf
+
+
+@njit(**_JIT)
 def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
-                      X, U, R, ynorm, tv, noise, quant, ubuf):
+                      X, U, R, ynorm, tv, noise, quant, ubuf, stiff, rtol, atol, budget):
     """Zero-order-hold loop: ``nsamples`` periods of ``Ts`` from sample ``s0`` (t = (s0 + s) Ts, exact
     whatever the chunking); store every ``dec``-th sample.
 
@@ -386,6 +446,8 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     command of sample k - d, or of sample 0 while k < d) and the actuator effects of ``fx``.
     The stored ``U`` is the delivered torque; the |u| bound is checked on the command.
     ``tv`` (n,) accumulates the total variation of the delivered torque over all samples.
+    The plant is advanced over a period by ``nsub`` RK4 sub-steps, or if ``stiff`` by
+    :func:`_stiff_period` (tolerances ``rtol``, ``atol``, at most ``budget`` steps per period).
     Returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``.
     """
     n = x0.shape[0]
@@ -403,6 +465,9 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     qm = np.empty(nj); qdm = np.empty(nj); ua = np.empty(nj); tau = np.empty(nj)
     nd = ubuf.shape[0]  # delay + 1
     h = Ts / nsub
+    V = np.empty((11, n2)); J = np.empty((n2, n2)); W = np.empty((n2, n2)); piv = np.zeros(n2, dtype=np.int64)
+    hs = np.full(1, Ts); ys = np.empty(1)
+    xp = x[0:n2]  # the plant's part of x, advanced in place
     nrhs = 0
     stored = 0
     for s in range(nsamples + 1):
@@ -430,7 +495,13 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
             return st, stored, nrhs, s, t
         if s == nsamples:
             break
-        for sub in range(nsub):
+        if stiff:
+            st, m = _stiff_period(xp, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V,
+                                  J, W, piv, rtol, atol, budget)
+            nrhs += m
+            if st != OK:
+                return st, stored, nrhs, s, t
+        for sub in range(0 if stiff else nsub):
             ok = _plant_rhs(x, ua, kc, wk, fx, fric, k1, tau)
             for i in range(n2):
                 xs[i] = x[i] + 0.5 * h * k1[i]

@@ -1,0 +1,125 @@
+"""How a sampled run advances the plant over a period: RK4 sub-steps, their length from the plant's
+stiffness, and the implicit periods (:attr:`rc3r.simulate.SimOptions.sampled_method`).
+
+:func:`default_substeps` chooses RK4 sub-steps from the rigid body and its effects (:func:`stiffness`:
+the fastest rate at which the effects damp a joint); :func:`plant_method` resolves ``"auto"`` to
+adaptive ROS4 periods where that stiffness would make RK4 costly; :func:`rc3r.simulate.simulate`
+applies both (``_resolve_steps``) and redoes a run on finer steps when it moved too fast for the
+longer one (``_too_fast``). Measurements behind each constant are in its comment and in
+docs/control.md, "Simulation".
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+#: Longest RK4 sub-step [s] of a sampled run whose plant adds no state-dependent force to the rigid
+#: body (no effect, or only torque saturation and limit monitors). Measured 2026-12-02 against the
+#: reference engine (DOP853 per period, rtol 1e-11), robust law at 1 kHz over 2 s with a payload: one
+#: 1 ms step per period is within 6.5e-13 rad (UR5), 1.6e-11 (Panda), 6.5e-12 (Z1) and 4.6e-12
+#: (double pendulum) of it (``tests/test_simulate.py::test_one_rk4_step_per_ms_matches_the_reference``).
+RIGID_SUBSTEP_S = 1e-3
+#: Longest RK4 sub-step [s] when an effect adds a state-dependent force (friction: its smooth Coulomb
+#: term is stiff; strong Coulomb friction needs still smaller steps, docs/control.md "Simulation").
+EFFECT_SUBSTEP_S = 2.5e-4
+#: Largest ``h lambda`` of a default RK4 sub-step ``h`` against the effects' damping rate ``lambda``
+#: (:func:`stiffness`): RK4's factor on ``exp(-h lambda)`` at 1.0 is 0.375 against 0.368 (stable to 2.79).
+STIFF_STEP = 1.0
+#: Effects that leave the rigid body's forces as they are (they act on the held torque or only watch).
+_NON_STIFF = ("saturation", "limits")
+
+
+#: Largest joint angle [rad] a default RK4 sub-step may cover (``max |qd| * h``) before a sampled run is
+#: redone with :data:`EFFECT_SUBSTEP_S` steps: a run whose motion turns violent (the eq. 7 law with a
+#: thin layer at 1 kHz reaches |qd| ~ 1450 rad/s and 1e7 N m on the 3R) needs the finer step (1 ms
+#: steps made it diverge; 0.25 ms ones agree with the reference engine, max|e| 1.2683 rad).
+MAX_STEP_ANGLE = 0.02
+
+
+def _too_fast(res, opt) -> bool:
+    """True if a sampled run on default sub-steps did not end ``ok`` or moved more than
+    :data:`MAX_STEP_ANGLE` per sub-step (then :func:`simulate` redoes it with finer steps)."""
+    if res.status != "ok":
+        return res.status != "interrupted"
+    h = (1.0 / opt.rate) / opt.substeps
+    qd = np.abs(np.asarray(res.qd, dtype=float))
+    return bool(qd.size and np.nanmax(qd) * h > MAX_STEP_ANGLE)
+
+
+def plant_method(plant, options) -> str:
+    """The resolved :attr:`SimOptions.sampled_method` of a sampled run on ``plant``: the option itself
+    unless ``"auto"``; then ``"ros4"`` if ``options.nsub`` is None and the effects' damping
+    (:func:`stiffness`) limits an RK4 sub-step below :data:`EFFECT_SUBSTEP_S` (``STIFF_STEP / lambda``
+    shorter than it), else ``"rk4"``; ``"rk4"`` in continuous mode (unused there). Measured with
+    ``benchmarks/stiff_plant.py`` (docs/control.md, "Simulation"): on the xArm7's URDF friction ROS4
+    makes 8.8-19x fewer right-hand sides than RK4 at 1 kHz and 500 Hz, on the Z1's 1.6-3.5x, at the
+    same distance from the reference engine."""
+    if options.sampled_method != "auto":
+        return options.sampled_method
+    if options.rate is None or options.nsub is not None:
+        return "rk4"
+    lam = stiffness(plant)
+    return "ros4" if lam > 0 and STIFF_STEP / lam < EFFECT_SUBSTEP_S else "rk4"
+
+
+def _resolve_steps(plant, options):
+    """``options`` with ``nsub`` (:func:`default_substeps`) and ``sampled_method`` (:func:`plant_method`)
+    decided for a sampled run on ``plant``; unchanged in continuous mode."""
+    if options.rate is None:
+        return options
+    method = plant_method(plant, options)
+    if options.nsub is None:
+        options = replace(options, nsub=default_substeps(plant, options.rate))
+    return replace(options, sampled_method=method)
+
+
+def default_substeps(plant, rate: float) -> int:
+    """RK4 sub-steps per period of a sampled run on ``plant`` at ``rate`` [Hz] when ``SimOptions.nsub``
+    is not given: steps of at most :data:`RIGID_SUBSTEP_S` for a rigid body (with saturation or limit
+    monitors), :data:`EFFECT_SUBSTEP_S` when another effect (friction) acts, and at most
+    :data:`STIFF_STEP` / :func:`stiffness` when the effects' damping is stiffer than that.
+    :func:`simulate` redoes a run on the longer step with :data:`EFFECT_SUBSTEP_S` steps when it did
+    not end ``ok`` or moved more than :data:`MAX_STEP_ANGLE` per step."""
+    from ..plants import as_plant
+
+    plant = as_plant(plant)
+    effects = getattr(plant, "effects", ())
+    h = RIGID_SUBSTEP_S if all(getattr(e, "name", "?") in _NON_STIFF for e in effects) else EFFECT_SUBSTEP_S
+    lam = stiffness(plant)
+    if lam > 0:
+        h = min(h, STIFF_STEP / lam)
+    return _steps(rate, h)
+
+
+def stiffness(plant, q=None) -> float:
+    r"""The fastest rate [1/s] at which the plant's effects damp a joint velocity:
+
+    .. math:: \lambda_{\max}\bigl(M(q)^{-1} D\bigr), \qquad D = \operatorname{diag}\Bigl(\sum_e d_e\Bigr),
+
+    ``d_e`` the largest slope of effect ``e``'s torque in ``qd`` (:meth:`rc3r.plants.Effect.damping`;
+    friction: ``F_v + F_c / v_s``), ``M`` the rigid body's mass matrix at ``q`` (default: zero). 0 if no
+    effect damps. Explicit RK4 is stable on ``-lambda`` for ``h lambda < 2.79``; :func:`default_substeps`
+    keeps ``h lambda <= STIFF_STEP``. Example: the xArm7's URDF damping, 10 N m s/rad on a wrist of
+    1.4e-4 kg m^2, gives about 7e4 1/s (a 14 us time constant).
+    """
+    from ..plants import as_plant
+
+    plant = as_plant(plant)
+    slopes = [d for d in (getattr(e, "damping", lambda: None)() for e in getattr(plant, "effects", ()))
+              if d is not None]
+    if not slopes:
+        return 0.0
+    D = np.sum(np.atleast_2d(np.asarray(slopes, dtype=float)), axis=0)
+    if not np.any(D > 0):
+        return 0.0
+    from scipy.linalg import eigh
+
+    rigid = plant.rigid
+    M = np.asarray(rigid.mass_matrix(np.zeros(rigid.n) if q is None else np.asarray(q, dtype=float)))
+    return float(np.max(eigh(np.diag(D), M, eigvals_only=True)))
+
+
+def _steps(rate: float, h: float) -> int:
+    """RK4 sub-steps of at most ``h`` [s] in one period of ``rate`` [Hz] (at least one)."""
+    return max(1, int(np.ceil((1.0 / float(rate)) / h - 1e-9)))
