@@ -86,6 +86,28 @@ def test_bad_method_is_refused():
         SimOptions(method="rk45")
 
 
+def test_sampled_method_is_checked_and_resolved(plant):
+    """SimOptions(sampled_method=...) outside auto/rk4/ros4: one ParameterError naming the choices.
+    plant_method: an explicit choice stands; "auto" is rk4 on a plant without stiff effects (the 3R,
+    rigid), in continuous mode, and whenever nsub is given; "ros4" on the UR5 with a 6.3e4 1/s friction
+    (1 / lambda = 16 us, under the 0.25 ms RK4 step) unless nsub is given."""
+    import dataclasses
+
+    import rc3r
+    from rc3r.simulate import plant_method
+
+    with pytest.raises(ParameterError, match="sampled_method must be one of auto, rk4, ros4, got 'euler'"):
+        SimOptions(sampled_method="euler")
+    assert plant_method(plant, SimOptions(rate=1000.0)) == "rk4"
+    assert plant_method(plant, SimOptions(rate=1000.0, sampled_method="ros4")) == "ros4"
+    stiff = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=0.1, friction=(0.5, 10.0))
+    o = stiff.options
+    assert plant_method(stiff.true_plant, o) == "ros4"
+    assert plant_method(stiff.true_plant, dataclasses.replace(o, nsub=64)) == "rk4"
+    assert plant_method(stiff.true_plant, dataclasses.replace(o, rate=None)) == "rk4"
+    assert plant_method(stiff.true_plant, dataclasses.replace(o, sampled_method="rk4")) == "rk4"
+
+
 def test_sampled_fast_matches_reference(plant, bounds):
     """Sampled mode (1 kHz ZOH, FBL): RK4 sub-steps vs DOP853 on the ABA plant agree to 1e-8 rad."""
     ctrl = FeedbackLinearization(bounds.theta0)
