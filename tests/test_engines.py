@@ -332,3 +332,40 @@ def test_stiff_viscous_plant_period_map_is_the_exponential(engine, tmp_path):
     assert abs(qd1[0] - 5.0) > 4.0  # the first period's decay is tested, not a resting rotor
     assert np.abs(res.qd[1:, 0] - qd1).max() <= 1e-9
     assert np.abs(res.q[1:, 0] - q1).max() <= 1e-9
+
+
+def test_stiff_period_work_budget_stops_the_run_with_its_cause(tmp_path):
+    """A ROS4 period that needs more steps than its budget (max(100, max_steps T); here rtol 1e-14 on
+    the 10 us rotor, max_steps 1/s) ends the run as ``diverged`` with a one-line message naming the
+    period's budget and the two ways out, and keeps the rows before it; it does not hang."""
+    path = tmp_path / "spinner.urdf"
+    path.write_text(_ONE_JOINT)
+    spec = rc3r.build_run(urdf=str(path), controller="fbl", rate=500.0, duration=0.2, friction="urdf",
+                          engine="fast")
+    opt = replace(spec.options, rtol=1e-14, atol=1e-16, max_steps=1.0)
+    res = simulate(spec.true_plant, spec.law, spec.trajectory, opt, x0=[0.1, 5.0])
+    assert res.status == "diverged" and len(res.t) >= 1
+    assert "a ROS4 period of the plant needed more than 100 steps" in res.message
+    assert "max_steps" in res.message and 'sampled_method = "rk4"' in res.message and "\n" not in res.message
+
+
+def test_one_joint_arm_regressors_equal_rnea(tmp_path, rng):
+    """A one-joint arm (Pinocchio returns its joint Jacobian and its torque regressor as vectors, not
+    (6, 1) and (1, 10) matrices): both regressors of the robot, the compiled kernel's and the
+    two-computeJointTorqueRegressor reference, times theta equal pin.rnea = I qdd for a rotor about
+    the gravity axis (I = 1e-4 kg m^2, no gravity torque). Relative 1e-12: a handful of flops."""
+    import pinocchio as pin
+
+    path = tmp_path / "spinner.urdf"
+    path.write_text(_ONE_JOINT)
+    from rc3r.robots import load_urdf_robot
+
+    robot = load_urdf_robot(path)
+    assert robot.n == 1 and robot.p == 1
+    q, qd, a = rng.uniform(-3, 3, (3, 20, 1))
+    for Y in (robot.regressor(q, qd, qd, a), robot.regressor_pinocchio(q, qd, qd, a)):
+        assert Y.shape == (20, 1, 1)
+        tau = Y @ robot.theta
+        want = np.array([pin.rnea(robot.model, robot.model.createData(), qi, qdi, ai) for qi, qdi, ai in zip(q, qd, a)])
+        np.testing.assert_allclose(tau, want, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(tau[:, 0], 1e-4 * a[:, 0], rtol=1e-12)

@@ -402,7 +402,8 @@ class PinocchioRobot(Robot):
         m, m0 = self._model, self._model0
         d, d0 = self._datas()
         f = pin.computeJointTorqueRegressor
-        out = np.array([f(m, d, qi, si, hi) - f(m0, d0, qi, di, -hi) for qi, si, di, hi in zip(Q, S, D, H)])
+        out = np.array([np.reshape(f(m, d, qi, si, hi) - f(m0, d0, qi, di, -hi), (m.nv, -1))  # 1 DoF: a vector
+                        for qi, si, di, hi in zip(Q, S, D, H)])
         if not standard:
             out = np.ascontiguousarray(out[:, :, self.base.independent])
         return out[0] if single else out

@@ -412,7 +412,6 @@ def _align(u) -> np.ndarray:
     return np.column_stack([x, np.cross(u, x), u])
 
 
-
 def local_axis(model, data, j: int) -> np.ndarray:
     """Joint ``j``'s motion subspace (6,) in its own frame (Pinocchio's LOCAL Jacobian column; ``data`` after
     ``computeJointJacobians``). A one-DoF model's Jacobian comes back from Pinocchio as a vector, hence
@@ -420,6 +419,7 @@ def local_axis(model, data, j: int) -> np.ndarray:
     import pinocchio as pin
 
     return np.asarray(pin.getJointJacobian(model, data, j, pin.LOCAL)).reshape(6, model.nv)[:, model.idx_vs[j]].copy()
+
 
 class ChainKernel:
     """The compiled regressor for one kinematic structure (constants read from a ``pinocchio.Model``).

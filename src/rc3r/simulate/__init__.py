@@ -47,7 +47,7 @@ from ..errors import DivergenceError, ParameterError
 from . import status as S
 from .engines.base import engine_names as _engine_names
 from .steps import (EFFECT_SUBSTEP_S, MAX_STEP_ANGLE, RIGID_SUBSTEP_S, STIFF_STEP, _resolve_steps, _steps,  # noqa: F401
-                    _too_fast, default_substeps, plant_method, stiffness)
+                    _too_fast, default_substeps, period_budget, plant_method, stiffness)
 
 __all__ = ["SimOptions", "SimResult", "simulate", "ENGINES", "METHODS", "planned_engine", "default_substeps",
            "stiffness", "plant_method", "SAMPLED_METHODS"]
@@ -288,6 +288,9 @@ def _message(status: int, t_end: float, opt: SimOptions, law=None) -> str:
         return "ok"
     if status == S.INTERRUPTED:
         return f"interrupted at t = {t_end:.6g} s (Ctrl-C or SIGTERM); the data up to then is kept"
+    if status == S.WORK and opt.rate is not None:
+        return (f"stopped at t = {t_end:.6g} s: a ROS4 period of the plant needed more than {period_budget(opt)} "
+                "steps (a stiff plant: raise [simulation] max_steps, or sampled_method = \"rk4\")")
     if status == S.WORK:
         eps = getattr(law, "eps", None)
         if eps is None and getattr(law, "eps_i", None) is not None:

@@ -40,6 +40,7 @@ from .. import _numba_cache
 from ..errors import ParameterError
 from . import METHODS, _limits, _result, _sample_grid
 from . import status as S
+from .steps import period_budget
 
 __all__ = ["CompiledSimulator", "instantiate", "run", "CHUNK_S", "HMAX"]
 
@@ -272,7 +273,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     ubuf = np.zeros(((loop.delay if loop is not None else 0) + 1, n))  # the delay line, across chunks
     per = max(1, int(round(CHUNK_S * opt.rate)) // dec) * dec  # samples per call, a multiple of dec
     stiff = opt.sampled_method == "ros4"
-    budget = max(100, int(np.ceil(opt.max_steps * Ts)))  # ROS4 steps per period: max_steps per second
+    budget = period_budget(opt)
     s0, row, stored, st, t_end, nrhs_all, done = 0, 0, 0, S.OK, 0.0, 0, 0
     try:
         while True:

@@ -123,3 +123,9 @@ def stiffness(plant, q=None) -> float:
 def _steps(rate: float, h: float) -> int:
     """RK4 sub-steps of at most ``h`` [s] in one period of ``rate`` [Hz] (at least one)."""
     return max(1, int(np.ceil((1.0 / float(rate)) / h - 1e-9)))
+
+
+def period_budget(options) -> int:
+    """Most ROS4 steps one sampling period may take (``sampled_method = "ros4"``): ``max_steps`` per
+    simulated second, at least 100."""
+    return max(100, int(np.ceil(options.max_steps / float(options.rate))))
