@@ -7,7 +7,7 @@ reference tolerances (DOP853 per period, rtol 1e-11) unless ``--no-reference``. 
 right-hand sides, wall time, max|e| and the largest difference of q from the reference run, and what
 ``sampled_method = "auto"`` picks (:func:`rc3r.simulate.plant_method`)::
 
-    python benchmarks/stiff_plant.py --arms xarm7,z1 --rates 500,1000 --duration 0.3
+    python benchmarks/stiff_plant.py --arms xarm7,z1 --rates 500,1000 --duration 0.3 [--rtol 1e-4 --atol 1e-6]
 
 The robust law's boundary layer is a high-gain loop, so two accurate integrations of the plant part by
 up to 1e-4 rad over a fraction of a second (it amplifies any last-digit difference): read the q
@@ -33,11 +33,14 @@ def main(argv=None) -> int:
     p.add_argument("--rates", default="500,1000")
     p.add_argument("--duration", type=float, default=0.3)
     p.add_argument("--no-reference", action="store_true")
+    p.add_argument("--rtol", type=float, default=None, help="the ROS4 periods' rtol (default: SimOptions')")
+    p.add_argument("--atol", type=float, default=None, help="the ROS4 periods' atol (default: SimOptions')")
     args = p.parse_args(argv)
     import rc3r
     from rc3r.simulate import plant_method, simulate, stiffness
 
-    print(f"# stiff plants, {time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime())} UTC, duration {args.duration:g} s")
+    print(f"# stiff plants, {time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime())} UTC, duration {args.duration:g} s, "
+          f"ROS4 rtol {args.rtol or 'default'}, atol {args.atol or 'default'}")
     print("| arm | rate [Hz] | lambda [1/s] | auto | method | RK4 nsub | rhs | wall [s] | max\\|e\\| [rad] "
           "| max\\|q - q_ref\\| [rad] |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -50,7 +53,10 @@ def main(argv=None) -> int:
             plant, o = spec.true_plant, spec.options
             auto = plant_method(plant, o)
             lam = f"{stiffness(plant):.3g}"
-            runs = [(m, simulate(plant, spec.law, spec.trajectory, replace(o, sampled_method=m, engine="fast")))
+            tol = {k: v for k, v in (("rtol", args.rtol), ("atol", args.atol)) if v is not None}
+            runs = [(m, simulate(plant, spec.law, spec.trajectory,
+                                 replace(o, sampled_method=m, engine="fast",
+                                         **({f"period_{k}": v for k, v in tol.items()} if m == "ros4" else {}))))
                     for m in ("rk4", "ros4")]
             ref = None if args.no_reference else simulate(plant, spec.law, spec.trajectory,
                                                           replace(o, engine="reference"))

@@ -76,8 +76,8 @@ CONFIG_KEYS = {
               "q0_error", "qd0_error", "noise_seed", "engine"),
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
-    "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "nsub", "sampled_method",
-                   "engine", "jac_reuse", "method", "max_steps", "q_max", "qd_max", "u_max"),
+    "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "period_rtol", "period_atol", "nsub",
+                   "sampled_method", "engine", "jac_reuse", "method", "max_steps", "q_max", "qd_max", "u_max"),
 }
 
 

@@ -281,7 +281,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
             st_k, m, nrhs, ndone, t_k = eng.sampled(
                 rigid, fx, code, cp, tp, X[row].copy(), s0, Ts, k, dec, opt.substeps, lim,
                 X[row:], U[row:], R[row:], yn[row:], tv, noise, quant, ubuf, kc=kc, stiff=stiff,
-                rtol=opt.rtol, atol=opt.atol, budget=budget)
+                rtol=opt.period_rtol, atol=opt.period_atol, budget=budget)
             nrhs_all += nrhs
             stored, st, t_end, done = row + m, st_k, t_k, s0 + ndone
             if st != S.OK or s0 + k >= nsamples:

@@ -147,7 +147,8 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 from scipy.integrate import solve_ivp  # here: importing SciPy's integrators costs ~1 s
 
                 sol = solve_ivp(lambda _t, y: ctl.plant_rhs(y, u), (t, t + Ts), x[:2 * n],
-                                method="DOP853" if reference else "Radau", rtol=rtol, atol=atol)
+                                method="DOP853" if reference else "Radau", rtol=rtol if reference else opt.period_rtol,
+                                atol=atol if reference else opt.period_atol)
                 ok, xs = sol.success, (sol.y[:, -1] if sol.success else None)
             else:
                 xs = _rk4(ctl, x[:2 * n], u, h, opt.substeps)
