@@ -46,13 +46,14 @@ def announce_engine(spec) -> None:
     plant = spec.true_plant if spec.true_plant is not None else spec.plant
     opt = spec.options
     if opt.rate is not None and opt.nsub is None:
-        nsub = default_substeps(plant, opt.rate)
-        if plant_method(plant, opt) == "ros4":
-            _progress(f"rc3r: stiff friction (it damps a joint at up to {stiffness(plant):.3g} 1/s): the plant "
-                      f"is advanced by adaptive L-stable "
-                      f"ROS4 steps per period instead of {nsub} RK4 sub-steps ([simulation] sampled_method)")
+        lam = stiffness(plant)
+        nsub = default_substeps(plant, opt.rate, lam)
+        if plant_method(plant, opt, lam) == "ros4":
+            _progress(f"rc3r: stiff friction (it damps a joint at up to {lam:.3g} 1/s): the plant is advanced by "
+                      f"adaptive L-stable ROS4 steps per period instead of {nsub} RK4 sub-steps "
+                      "([simulation] sampled_method)")
         elif nsub > STIFF_NOTE_SUBSTEPS:
-            _progress(f"rc3r: stiff friction (it damps a joint at up to {stiffness(plant):.3g} 1/s): {nsub} RK4 "
+            _progress(f"rc3r: stiff friction (it damps a joint at up to {lam:.3g} 1/s): {nsub} RK4 "
                       f"sub-steps per {1e3 / opt.rate:g} ms period, the run costs about {nsub} times a rigid plant's")
     name, why = planned_engine(plant, spec.law, opt)
     if why is not None:

@@ -47,19 +47,19 @@ def _too_fast(res, opt) -> bool:
     return bool(qd.size and np.nanmax(qd) * h > MAX_STEP_ANGLE)
 
 
-def plant_method(plant, options) -> str:
+def plant_method(plant, options, lam: float | None = None) -> str:
     """The resolved :attr:`SimOptions.sampled_method` of a sampled run on ``plant``: the option itself
     unless ``"auto"``; then ``"ros4"`` if ``options.nsub`` is None and the effects' damping
     (:func:`stiffness`) limits an RK4 sub-step below :data:`EFFECT_SUBSTEP_S` (``STIFF_STEP / lambda``
     shorter than it), else ``"rk4"``; ``"rk4"`` in continuous mode (unused there). Measured with
     ``benchmarks/stiff_plant.py`` (docs/control.md, "Simulation"): on the xArm7's URDF friction ROS4
     makes 8.8-19x fewer right-hand sides than RK4 at 1 kHz and 500 Hz, on the Z1's 1.6-3.5x, at the
-    same distance from the reference engine."""
+    same distance from the reference engine. ``lam``: :func:`stiffness` of ``plant`` if already known."""
     if options.sampled_method != "auto":
         return options.sampled_method
     if options.rate is None or options.nsub is not None:
         return "rk4"
-    lam = stiffness(plant)
+    lam = stiffness(plant) if lam is None else lam
     return "ros4" if lam > 0 and STIFF_STEP / lam < EFFECT_SUBSTEP_S else "rk4"
 
 
@@ -68,25 +68,27 @@ def _resolve_steps(plant, options):
     decided for a sampled run on ``plant``; unchanged in continuous mode."""
     if options.rate is None:
         return options
-    method = plant_method(plant, options)
+    lam = stiffness(plant)  # once for both decisions
+    method = plant_method(plant, options, lam)
     if options.nsub is None:
-        options = replace(options, nsub=default_substeps(plant, options.rate))
+        options = replace(options, nsub=default_substeps(plant, options.rate, lam))
     return replace(options, sampled_method=method)
 
 
-def default_substeps(plant, rate: float) -> int:
+def default_substeps(plant, rate: float, lam: float | None = None) -> int:
     """RK4 sub-steps per period of a sampled run on ``plant`` at ``rate`` [Hz] when ``SimOptions.nsub``
     is not given: steps of at most :data:`RIGID_SUBSTEP_S` for a rigid body (with saturation or limit
     monitors), :data:`EFFECT_SUBSTEP_S` when another effect (friction) acts, and at most
     :data:`STIFF_STEP` / :func:`stiffness` when the effects' damping is stiffer than that.
     :func:`simulate` redoes a run on the longer step with :data:`EFFECT_SUBSTEP_S` steps when it did
-    not end ``ok`` or moved more than :data:`MAX_STEP_ANGLE` per step."""
+    not end ``ok`` or moved more than :data:`MAX_STEP_ANGLE` per step. ``lam``: :func:`stiffness` of
+    ``plant`` if already known."""
     from ..plants import as_plant
 
     plant = as_plant(plant)
     effects = getattr(plant, "effects", ())
     h = RIGID_SUBSTEP_S if all(getattr(e, "name", "?") in _NON_STIFF for e in effects) else EFFECT_SUBSTEP_S
-    lam = stiffness(plant)
+    lam = stiffness(plant) if lam is None else lam
     if lam > 0:
         h = min(h, STIFF_STEP / lam)
     return _steps(rate, h)
