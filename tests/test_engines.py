@@ -372,25 +372,43 @@ def test_one_joint_arm_regressors_equal_rnea(tmp_path, rng):
         np.testing.assert_allclose(tau[:, 0], 1e-4 * a[:, 0], rtol=1e-12)
 
 
+def _dahlquist_step(T, z):
+    """One step of h = 1 of the Rosenbrock table ``T`` (rc3r.simulate.engines._tableaux layout) on
+    Dahlquist's y' = z y, y(0) = 1, written out from the transformed form (Hairer & Wanner IV.7):
+    (1 / gamma_1 - z) k_i = z (1 + sum_j a_ij k_j) + sum_j c_ij k_j. Returns (R(z), estimate e(z))."""
+    s = T.shape[0] - 2
+    k, f = [], z
+    for i in range(s):
+        if T[i, 2]:
+            f = z * (1 + sum(T[i, 3 + j] * k[j] for j in range(i)))
+        k.append((f + sum(T[i, 3 + s + j] * k[j] for j in range(i))) / (1.0 / T[0, 1] - z))
+    return 1 + sum(T[s, j] * k[j] for j in range(s)), sum(T[s + 1, j] * k[j] for j in range(s))
+
+
 def test_ros4_is_l_stable_and_its_estimate_is_not():
-    """The compiled ROS4's coefficients on Dahlquist's y' = z y, y(0) = 1, one step of h = 1 written out
-    from the transformed Rosenbrock form (Hairer & Wanner IV.7): R(z) -> 0 as z -> -inf (L-stable;
-    -1.7e-5 at z = -1e6), R(-0.01) = exp(-0.01) to order 4 (error ~ z^5 / 120 ~ 1e-12 here), and the
-    embedded solution R(z) - e(z) tends to 0.55, not 0: the error estimate counts a damped transient as
+    """The compiled ROS4's table on Dahlquist's equation (:func:`_dahlquist_step`): R(z) -> 0 as z -> -inf
+    (L-stable; -1.7e-5 at z = -1e6), R(-0.01) = exp(-0.01) to order 4 (error ~ z^5 / 120 ~ 1e-12 here), and
+    the embedded solution R(z) - e(z) tends to 0.55, not 0: the error estimate counts a damped transient as
     error (docs/control.md: why the ROS4 periods' tolerances are 1e-4 / 1e-6)."""
-    from rc3r.simulate.engines import compiled as c
+    from rc3r.simulate.engines._tableaux import ROS4
 
-    def step(z):
-        W = 1.0 / c._R4_GAMMA[0] - z
-        k1 = z / W
-        k2 = (z * (1 + c._R4_A21 * k1) + c._R4_C21 * k1) / W
-        f3 = z * (1 + c._R4_A31 * k1 + c._R4_A32 * k2)
-        k3 = (f3 + c._R4_C31 * k1 + c._R4_C32 * k2) / W
-        k4 = (f3 + c._R4_C41 * k1 + c._R4_C42 * k2 + c._R4_C43 * k3) / W
-        ks = (k1, k2, k3, k4)
-        return 1 + sum(m * k for m, k in zip(c._R4_M, ks)), sum(e * k for e, k in zip(c._R4_E, ks))
-
-    R, e = step(-1e6)
+    R, e = _dahlquist_step(ROS4, -1e6)
     assert abs(R) < 1e-4 and 0.5 < abs(R - e) < 0.6
-    R, e = step(-0.01)
+    R, e = _dahlquist_step(ROS4, -0.01)
     assert abs(R - np.exp(-0.01)) < 1e-11 and abs(e) < 1e-8
+
+
+def test_rodas_is_stiffly_accurate_with_its_estimate():
+    """The compiled RODAS table (Hairer & Wanner's rodas.f) on Dahlquist's equation: the solution and the
+    embedded one both vanish as z -> -inf (|R|, |R - e| < 1e-6 at z = -1e8, where they are O(1/z): 8.8e-8
+    and 4.4e-8; stiffly accurate, unlike ROS4's estimate above), R(-0.01) = exp(-0.01) to order 4 (error
+    7e-14, bound 1e-11) with an estimate below 1e-8, and R(-1) within 1e-3 of exp(-1) (3.0e-4; ROS4's is
+    3.3e-3). A mistyped coefficient moves one of these by orders of magnitude."""
+    from rc3r.simulate.engines._tableaux import RODAS
+
+    R, e = _dahlquist_step(RODAS, -1e8)
+    assert abs(R) < 1e-6 and abs(R - e) < 1e-6
+    R, e = _dahlquist_step(RODAS, -0.01)
+    assert abs(R - np.exp(-0.01)) < 1e-11 and abs(e) < 1e-8
+    R, _ = _dahlquist_step(RODAS, -1.0)
+    assert abs(R - np.exp(-1.0)) < 1e-3

@@ -42,10 +42,10 @@ def _controllers(bounds, table1):
 NAMES = ["fbl", "robust", "robust-eps0.05", "robust-coeff", "adaptive", "pd"]
 
 
-@pytest.mark.parametrize("method", ["ode23s", "ros4"])
+@pytest.mark.parametrize("method", ["ode23s", "ros4", "rodas"])
 @pytest.mark.parametrize("name", NAMES)
 def test_fast_engine_matches_reference(plant, bounds, table1, name, method):
-    """Stated accuracy (rc3r.simulate), both Rosenbrock methods: |q_fast - q_ref| <= 3e-6 rad,
+    """Stated accuracy (rc3r.simulate), every Rosenbrock method: |q_fast - q_ref| <= 3e-6 rad,
     |e_fast - e_ref| <= 0.1 % of max |e_ref|, |u_fast - u_ref| <= 1 % of max |u|, over 1.5 s of the
     perturbed scenario (reference: Pinocchio ABA + Radau rtol 1e-11)."""
     ctrl = _controllers(bounds, table1)[name]
@@ -70,19 +70,45 @@ def test_ros4_is_fourth_order_accurate_where_ode23s_is_second(plant, bounds, tab
     assert r4.ok and np.abs(r4.q - ref.q).max() <= 5e-9
 
 
+def test_robust_laws_default_to_rodas_and_it_is_stiffly_accurate(plant, bounds, table1):
+    """The default method ("auto", rc3r.simulate.continuous_method) takes RODAS for the laws with a boundary
+    layer and ode23s for the others, and on the paper's robust law (1.5 s, default tolerances) RODAS lands
+    within 1e-9 rad of the Radau reference in q and within 5e-5 of max|u| in u (measured 1.3e-10 and 1.4e-5;
+    ode23s there: 2.4e-8 and 2.3e-4): its steps end on the output times and it is stiffly accurate, so the
+    stored u is the law's own at an accurate state. An order-3 RODAS (a wrong coefficient) or interpolated
+    torques fail the bounds."""
+    from rc3r.controllers.ellipsoid import RobustEllipsoid
+    from rc3r.simulate import continuous_method
+
+    ctrls = _controllers(bounds, table1)
+    auto = SimOptions(duration=1.5)
+    for name, want in (("robust", "rodas"), ("robust-coeff", "rodas"), ("fbl", "ode23s"), ("adaptive", "ode23s"),
+                       ("pd", "ode23s")):
+        assert continuous_method(ctrls[name], auto).method == want, name
+    ell = RobustEllipsoid(bounds.theta0, P=np.eye(15) / bounds.rho ** 2)
+    assert continuous_method(ell, auto).method == "rodas"
+    assert continuous_method(ctrls["robust"], SimOptions(method="ros4")).method == "ros4"  # given: kept
+    assert continuous_method(ctrls["robust"], SimOptions(rate=1000.0)).method == "auto"  # sampled: unused
+    fast = simulate(plant, ctrls["robust"], paper_trajectory(), auto)
+    ref = simulate(plant, ctrls["robust"], paper_trajectory(), SimOptions(duration=1.5, engine="reference"))
+    assert fast.ok and fast.options.method == "rodas"
+    assert np.abs(fast.q - ref.q).max() <= 1e-9
+    assert np.abs(fast.u - ref.u).max() <= 5e-5 * np.abs(ref.u).max()
+
+
 def test_method_codes_are_the_templates():
     """rc3r.simulate.METHODS (the names SimOptions takes) maps each name to the compiled template's
-    own code for that method (engines.compiled.ODE23S, ROS4): the two are written in two modules."""
+    own code for that method (engines.compiled.ODE23S, ROS4, RODAS): the two are written in two modules."""
     from rc3r.simulate import METHODS
     from rc3r.simulate.engines import compiled
 
-    assert METHODS == {"ode23s": compiled.ODE23S, "ros4": compiled.ROS4}
-    assert compiled.ODE23S != compiled.ROS4
+    assert METHODS == {"ode23s": compiled.ODE23S, "ros4": compiled.ROS4, "rodas": compiled.RODAS}
+    assert len({compiled.ODE23S, compiled.ROS4, compiled.RODAS}) == 3
 
 
 def test_bad_method_is_refused():
     """SimOptions(method=...) outside rc3r.simulate.METHODS: one ParameterError naming the choices."""
-    with pytest.raises(ParameterError, match="method must be one of ros4, ode23s"):
+    with pytest.raises(ParameterError, match="method must be one of auto, ros4, ode23s, rodas, got 'rk45'"):
         SimOptions(method="rk45")
 
 

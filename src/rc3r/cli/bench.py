@@ -157,7 +157,7 @@ def _render_generated(g: dict) -> str:
 def _render_integrators(g: dict) -> str:
     """Rosenbrock vs SciPy on the same compiled right-hand side."""
     lines = ["Integrators on the same compiled closed loop (rtol 1e-6, atol 1e-8; 'q diff' = max |q - q_yardstick|, "
-             "yardstick SciPy Radau rtol 1e-10):"]
+             "yardstick SciPy Radau rtol 1e-10; 'vs default' = wall over that of the method the run's default options take):"]
     rows = []
     for run, x in g.items():
         for label, m in x["methods"].items():

@@ -147,6 +147,9 @@ class Law:
     name = "?"
     code = None
     model_inputs = ()
+    #: True for a law with a boundary layer (a gain ``rho / eps``): continuous runs use RODAS
+    #: (:func:`rc3r.simulate.continuous_method`).
+    stiff = False
 
     def __post_init__(self):
         th = _array("theta", self.theta)
@@ -336,6 +339,7 @@ class Robust(_Sliding):
     name = "robust"
     code = _K.ROBUST
     model_inputs = ("rho",)
+    stiff = True
 
     def __post_init__(self):
         super().__post_init__()
@@ -364,6 +368,7 @@ class RobustPerCoefficient(_Sliding):
     name = "robust-coeff"
     code = _K.ROBUST_COEFF
     model_inputs = ("rho_i",)
+    stiff = True
 
     def __post_init__(self):
         super().__post_init__()

@@ -68,6 +68,7 @@ class RobustEllipsoid(Law):
     eps: float = 0.5
     name = "robust-ellipsoid"
     model_inputs = ("P",)
+    stiff = True
 
     def __post_init__(self):
         super().__post_init__()

@@ -47,10 +47,10 @@ from ..errors import DivergenceError, ParameterError
 from . import status as S
 from .engines.base import engine_names as _engine_names
 from .steps import (EFFECT_SUBSTEP_S, MAX_STEP_ANGLE, RIGID_SUBSTEP_S, STIFF_STEP, _resolve_steps, _steps,  # noqa: F401
-                    _too_fast, default_substeps, period_budget, plant_method, stiffness)
+                    _too_fast, continuous_method, default_substeps, period_budget, plant_method, stiffness)
 
 __all__ = ["SimOptions", "SimResult", "simulate", "ENGINES", "METHODS", "planned_engine", "default_substeps",
-           "stiffness", "plant_method", "SAMPLED_METHODS"]
+           "stiffness", "plant_method", "SAMPLED_METHODS", "continuous_method"]
 
 #: Engines accepted by :class:`SimOptions`: ``"auto"`` and every name and alias of the engine registry
 #: (:mod:`rc3r.simulate.engines`; a live view: ``"auto", "fast", "compiled", "python", "reference"`` and
@@ -62,8 +62,9 @@ ENGINES = _engine_names()
 MAX_ROWS = 5_000_000
 
 #: The fast engine's continuous-time Rosenbrock methods: name -> code of
-#: :func:`rc3r.simulate.engines.compiled.integrate_continuous` (its ``ODE23S``, ``ROS4``).
-METHODS = {"ros4": 1, "ode23s": 0}
+#: :func:`rc3r.simulate.engines.compiled.integrate_continuous` (its ``ODE23S``, ``ROS4``, ``RODAS``);
+#: :attr:`SimOptions.method` also takes ``"auto"`` (:func:`continuous_method`).
+METHODS = {"ros4": 1, "ode23s": 0, "rodas": 2}
 
 #: Ways of advancing the plant over a sampling period (:attr:`SimOptions.sampled_method`).
 SAMPLED_METHODS = ("auto", "rk4", "ros4")
@@ -119,11 +120,15 @@ class SimOptions:
         older one). 1 = every step (MATLAB's ode23s). The default 5 makes the FBL
         runs about 2x faster and the robust runs 1.0-1.3x, at the same accuracy against
         a tight SciPy Radau solution (``rc3r bench``, docs/performance.md).
-    method : {"ros4", "ode23s"}
-        Fast engine, continuous mode: the Rosenbrock method (:data:`METHODS`). ``"ode23s"``
-        (default): Shampine & Reichelt's order-2 pair (MATLAB's ode23s); ``"ros4"``: Hairer &
-        Wanner's L-stable order-4 method with an order-3 error estimate (give it ``jac_reuse = 1``:
-        it is not a W-method). The python and reference engines use SciPy and ignore it.
+    method : {"auto", "ode23s", "ros4", "rodas"}
+        Fast engine, continuous mode: the Rosenbrock method (:data:`METHODS`). ``"ode23s"``:
+        Shampine & Reichelt's order-2 pair (MATLAB's ode23s); ``"ros4"``: Hairer & Wanner's L-stable
+        order-4 method with an order-3 error estimate (give it ``jac_reuse = 1``: it is not a
+        W-method); ``"rodas"``: Hairer & Wanner's stiffly accurate order-4 RODAS, a Jacobian every
+        step (``jac_reuse`` ignored), steps ending on the output times. ``"auto"`` (default):
+        ``"rodas"`` for a law with a boundary layer (``Law.stiff``: the robust laws), ``"ode23s"``
+        otherwise (:func:`continuous_method`, which states the measurements). The python and
+        reference engines use SciPy and ignore it.
     max_steps : float
         Work budget of continuous mode: integrator steps (accepted and rejected) per
         simulated second. The fast engine checks it inside the compiled loop (per 0.5 s
@@ -147,7 +152,7 @@ class SimOptions:
     sampled_method: str = "auto"
     engine: str = "auto"
     jac_reuse: int = 5
-    method: str = "ode23s"
+    method: str = "auto"
     max_steps: float = 1e6
     q_max: float = 1e3
     qd_max: float = 1e4
@@ -175,8 +180,8 @@ class SimOptions:
         if isinstance(self.jac_reuse, bool) or not isinstance(self.jac_reuse, (int, np.integer)) \
                 or not 1 <= self.jac_reuse <= 1000:
             raise ParameterError(f"jac_reuse must be an integer in [1, 1000], got {self.jac_reuse!r}")
-        if not isinstance(self.method, str) or self.method not in METHODS:
-            raise ParameterError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if not isinstance(self.method, str) or (self.method not in METHODS and self.method != "auto"):
+            raise ParameterError(f"method must be one of auto, {', '.join(METHODS)}, got {self.method!r}")
         if not isinstance(self.sampled_method, str) or self.sampled_method not in SAMPLED_METHODS:
             raise ParameterError(f"sampled_method must be one of {', '.join(SAMPLED_METHODS)}, "
                                  f"got {self.sampled_method!r}")
@@ -332,7 +337,7 @@ def planned_engine(plant, law, options: SimOptions) -> tuple[str, str | None]:
     from .engines import ENGINES
 
     plant = as_plant(plant)
-    options = _resolve_steps(plant, options)
+    options = continuous_method(law, _resolve_steps(plant, options))
     name = _engine(plant, law, options)
     why = None
     if options.engine == "auto":
@@ -417,7 +422,7 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     plant = as_plant(plant)
     model = plant.rigid if model is None else model
     auto_step = options.rate is not None and options.nsub is None
-    options = _resolve_steps(plant, options)
+    options = continuous_method(law, _resolve_steps(plant, options))
     _check_structure(plant, model, law, trajectory, loop, options)
     if x0 is None and loop is not None:
         x0 = loop.x0(*trajectory.evaluate(0.0)[:2])

@@ -40,7 +40,7 @@ from .. import _numba_cache
 from ..errors import ParameterError
 from . import METHODS, _limits, _result, _sample_grid
 from . import status as S
-from .steps import period_budget
+from .steps import continuous_method, period_budget
 
 __all__ = ["CompiledSimulator", "instantiate", "run", "CHUNK_S", "HMAX"]
 
@@ -209,7 +209,7 @@ class CompiledSimulator:
     def continuous(self, rigid, fx, code, cp, tp, x0, t_out, rtol, atol, h0, hmax, lim, X, U, R, yn, jac_reuse,
                    max_steps, kc=None, method=0):
         """``kc``: :meth:`constants` of ``rigid`` if already packed (a run packs them once for all its chunks);
-        ``method``: a code of :data:`rc3r.simulate.METHODS` (default 0, ode23s, as ``SimOptions``)."""
+        ``method``: a code of :data:`rc3r.simulate.METHODS` (default 0, ode23s)."""
         kc = self.constants(rigid) if kc is None else kc
         return self.instance.integrate_continuous(x0, t_out, kc, fx, code, cp, tp, rtol, atol, h0,
                                                   hmax, lim, X, U, R, yn, jac_reuse, max_steps, int(method))
@@ -252,7 +252,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 st_k, m, nrhs, nsteps, nrej, t_k = eng.continuous(
                     rigid, fx, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, 1e-5, hmax,
                     lim, X[start:end + 1], U[start:end + 1], R[start:end + 1], yn[start:end + 1], opt.jac_reuse,
-                    budget, kc=kc, method=METHODS[opt.method])
+                    budget, kc=kc, method=METHODS[continuous_method(law, opt).method])
                 counts += (nrhs, nsteps, nrej)
                 stored, st, t_end = start + m, st_k, t_k
                 if st != S.OK or end == nout - 1:

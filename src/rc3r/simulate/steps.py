@@ -1,5 +1,6 @@
-"""How a sampled run advances the plant over a period: RK4 sub-steps, their length from the plant's
-stiffness, and the implicit periods (:attr:`rc3r.simulate.SimOptions.sampled_method`).
+"""How a run is stepped: in sampled mode, how the plant is advanced over a period (RK4 sub-steps, their
+length from the plant's stiffness, or implicit periods: :attr:`rc3r.simulate.SimOptions.sampled_method`);
+in continuous mode, which Rosenbrock method the fast engine uses (:func:`continuous_method`).
 
 :func:`default_substeps` chooses RK4 sub-steps from the rigid body and its effects (:func:`stiffness`:
 the fastest rate at which the effects damp a joint); :func:`plant_method` resolves ``"auto"`` to
@@ -61,6 +62,20 @@ def plant_method(plant, options, lam: float | None = None) -> str:
         return "rk4"
     lam = stiffness(plant) if lam is None else lam
     return "ros4" if lam > 0 and STIFF_STEP / lam < EFFECT_SUBSTEP_S else "rk4"
+
+
+def continuous_method(law, options):
+    """``options`` with :attr:`~rc3r.simulate.SimOptions.method` decided for a continuous run of ``law``: the
+    option itself unless ``"auto"``; then ``"rodas"`` if the law has a boundary layer (``law.stiff``: the
+    robust laws, whose gain ``rho / eps Y Y^T`` makes the loop stiff), else ``"ode23s"``; unchanged in
+    sampled mode. Measured by ``python benchmarks/continuous_methods.py`` (docs/performance.md,
+    "Continuous-time methods"): on the 3R's robust runs RODAS makes fewer right-hand sides than ode23s
+    and lands closer to the yardstick in q, qd and u (its steps end on the output times and it is stiffly
+    accurate, so the stored u is the law's own); on FBL, PD and the adaptive law (not stiff) its
+    Jacobian per step costs 3-4x the right-hand sides of ode23s with a kept Jacobian."""
+    if options.rate is not None or options.method != "auto":
+        return options
+    return replace(options, method="rodas" if getattr(law, "stiff", False) else "ode23s")
 
 
 def _resolve_steps(plant, options):

@@ -45,6 +45,7 @@ from rc3r.controllers._kernels import inertia_gain, law_signals, law_theta, uses
 from rc3r.plants._kernels import actuate, apply_effects, measure
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
+from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
 from rc3r.trajectory import reference_into
 
@@ -142,76 +143,61 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
 
 
 #: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
-ODE23S, ROS4 = 0, 1
-
-# ROS4: Hairer & Wanner, Solving ODEs II (1996), sec. IV.7, the L-stable order-4 method with 4 stages and an
-# L-stable embedded order-3 solution (GRK4-type, coefficients of the transformed form G k_i = f(Y_i) + sum
-# c_ij / h k_j + h gamma_i f_t, G = I / (h gamma_1) - J, as tabulated by KPP's Rosenbrock integrators);
-# stage 4 reuses stage 3's f (alpha_4 = alpha_3), so a step costs 2 new f plus f at the new state.
-_R4_A21 = 2.0
-_R4_A31 = 1.867943637803922
-_R4_A32 = 0.2344449711399156
-_R4_C21 = -7.137615036412310
-_R4_C31 = 2.580708087951457
-_R4_C32 = 0.6515950076447975
-_R4_C41 = -2.137148994382534
-_R4_C42 = -0.3214669691237626
-_R4_C43 = -0.6949742501781779
-_R4_M = (2.255570073418735, 0.2870493262186792, 0.4353179431840180, 1.093502252409163)
-_R4_E = (-0.2815431932141155, -0.07276199124938920, -0.1082196201495311, -1.093502252409163)
-_R4_ALPHA2 = 1.145640000000000
-_R4_ALPHA3 = 0.6552168638155900
-_R4_GAMMA = (0.5728200000000000, -1.769193891319233, 0.7592633437920482, -0.1049021087100450)
-
+ODE23S, ROS4, RODAS = 0, 1, 2
 
 @njit(**_JIT)
-def _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u, ref, Y, xi, v, a, r, w, ys,
-                 k1, k2, k3, k4, tmp, xnew, rtol, atol, plant_only=False):
-    """One ROS4 step from (t, x) of size h (F0 = f(t, x), J, Ft at (t, x)): fills ``xnew`` and, if the
-    step is acceptable, ``F2 = f(t + h, xnew)`` (``u``, ``ys`` there). Returns ``(status, err, n_f)``:
-    status 0, 1 if the plant's M was not PD at a stage or at xnew, 2 if G is singular; err the scaled
-    RMS error estimate (as :func:`integrate_continuous`'s); n_f the evaluations of f made. ``plant_only``:
-    f is the plant alone under the held ``u`` (:func:`_f`; sampled mode's stiff plants)."""
+def _rosenbrock_stages(T, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u, ref, Y, xi, v, a, r,
+                       w, ys, K, tmp, xnew, rtol, atol, plant_only=False):
+    """One step of the Rosenbrock method of table ``T`` (:mod:`._tableaux`: ROS4, RODAS) from (t, x) of size h
+    (F0 = f(t, x), J, Ft at (t, x); ``K`` (>= s, n) scratch): fills ``xnew`` and, if the step is acceptable,
+    ``F2 = f(t + h, xnew)`` (``u``, ``ys`` there). Returns ``(status, err, n_f)``: status 0, 1 if the plant's M
+    was not PD at a stage or at xnew, 2 if G is singular; err the scaled RMS error estimate (as
+    :func:`integrate_continuous`'s); n_f the evaluations of f made. ``plant_only``: f is the plant alone under
+    the held ``u`` (:func:`_f`; sampled mode's stiff plants)."""
     n = x.shape[0]
-    hg = 1.0 / (h * _R4_GAMMA[0])
+    s = T.shape[0] - 2
+    hg = 1.0 / (h * T[0, 1])
     for i in range(n):
         for j in range(n):
             W[i, j] = -J[i, j]
         W[i, i] += hg
     if not _lu_factor(W, piv):
         return 2, 1e300, 0
-    for i in range(n):
-        k1[i] = F0[i] + h * _R4_GAMMA[0] * Ft[i]
-    _lu_solve(W, piv, k1)
-    for i in range(n):
-        tmp[i] = x[i] + _R4_A21 * k1[i]
-    ok1 = _f(plant_only, t + _R4_ALPHA2 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
-    for i in range(n):
-        k2[i] = F1[i] + _R4_C21 / h * k1[i] + h * _R4_GAMMA[1] * Ft[i]
-    _lu_solve(W, piv, k2)
-    for i in range(n):
-        tmp[i] = x[i] + _R4_A31 * k1[i] + _R4_A32 * k2[i]
-    ok2 = _f(plant_only, t + _R4_ALPHA3 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
-    for i in range(n):
-        k3[i] = F1[i] + (_R4_C31 * k1[i] + _R4_C32 * k2[i]) / h + h * _R4_GAMMA[2] * Ft[i]
-    _lu_solve(W, piv, k3)
-    for i in range(n):
-        k4[i] = F1[i] + (_R4_C41 * k1[i] + _R4_C42 * k2[i] + _R4_C43 * k3[i]) / h + h * _R4_GAMMA[3] * Ft[i]
-    _lu_solve(W, piv, k4)
+    ok, nf = True, 0
+    F1[:] = F0
+    for st in range(s):
+        if T[st, 2] != 0.0:
+            for i in range(n):
+                acc = x[i]
+                for j in range(st):
+                    acc += T[st, 3 + j] * K[j, i]
+                tmp[i] = acc
+            ok &= _f(plant_only, t + T[st, 0] * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r,
+                     w, ys)
+            nf += 1
+        for i in range(n):
+            acc = 0.0
+            for j in range(st):
+                acc += T[st, 3 + s + j] * K[j, i]
+            K[st, i] = F1[i] + acc / h + h * T[st, 1] * Ft[i]
+        _lu_solve(W, piv, K[st])
     err = 0.0
     for i in range(n):
-        xnew[i] = x[i] + _R4_M[0] * k1[i] + _R4_M[1] * k2[i] + _R4_M[2] * k3[i] + _R4_M[3] * k4[i]
-        ei = _R4_E[0] * k1[i] + _R4_E[1] * k2[i] + _R4_E[2] * k3[i] + _R4_E[3] * k4[i]
-        ei /= atol + rtol * max(abs(x[i]), abs(xnew[i]))
+        xn, ei = x[i], 0.0
+        for j in range(s):
+            xn += T[s, j] * K[j, i]
+            ei += T[s + 1, j] * K[j, i]
+        xnew[i] = xn
+        ei /= atol + rtol * max(abs(x[i]), abs(xn))
         err += ei * ei
     err = math.sqrt(err / n)
-    if not (ok1 and ok2):
-        return 1, err, 2
+    if not ok:
+        return 1, err, nf
     if err <= 1.0:  # f at the new state: the next step's F0, the outputs' u
         if not _f(plant_only, t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys):
-            return 1, err, 3
-        return 0, err, 3
-    return 0, err, 2
+            return 1, err, nf + 1
+        return 0, err, nf + 1
+    return 0, err, nf
 
 
 @njit(**_JIT)
@@ -219,7 +205,7 @@ def _ode23s_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1
                    k1, k2, k3, tmp, xnew, rtol, atol):
     """One ode23s step (Shampine & Reichelt 1997; a W-method of order 2, so a kept J keeps the order)
     from (t, x) of size h (F0 = f(t, x), J, Ft at (t, x)): fills ``xnew`` and ``F2 = f(t + h, xnew)``
-    (``u``, ``ys`` there). Returns ``(status, err, n_f)`` as :func:`_ros4_stages`: status 0, 1 if the
+    (``u``, ``ys`` there). Returns ``(status, err, n_f)`` as :func:`_rosenbrock_stages`: status 0, 1 if the
     plant's M was not PD at the midpoint or at xnew, 2 if W is singular; err the scaled RMS estimate."""
     n = x.shape[0]
     d = 1.0 / (2.0 + math.sqrt(2.0))
@@ -271,7 +257,10 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     The Jacobian is recomputed every ``jac_reuse`` accepted steps and after any
     rejected step taken with an older one (``jac_reuse = 1``: every step, as ode23s).
     ``method``: :data:`ODE23S` (order 2, error estimate of order 3: :func:`_ode23s_stages`) or
-    :data:`ROS4` (order 4, embedded order 3: :func:`_ros4_stages`); both evaluate f at the new state
+    :data:`ROS4` or :data:`RODAS` (order 4, embedded order 3: :func:`_rosenbrock_stages`); all evaluate f at
+    the new state before accepting it. RODAS takes a Jacobian every step (``jac_reuse`` is ignored) and ends
+    its steps on the output times, so the stored rows are its own step ends (stiffly accurate: u there is
+    the law's on the integrated state, not interpolated).
     before accepting it.
     Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
     ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
@@ -280,8 +269,11 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     x = x0.copy()
     xnew = np.empty(n)
     F0 = np.empty(n); F1 = np.empty(n); F2 = np.empty(n); Ft = np.empty(n); Fp = np.empty(n)
-    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); tmp = np.empty(n)
-    q_err = 4.0 if method == ROS4 else 3.0  # the error estimate's order + 1: exponent of the step control
+    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); K = np.empty((6, n)); tmp = np.empty(n)
+    q_err = 3.0 if method == ODE23S else 4.0  # the error estimate's order + 1: exponent of the step control
+    tab = _RODAS if method == RODAS else _ROS4
+    if method == RODAS:
+        jac_reuse = 1
     J = np.empty((n, n)); W = np.empty((n, n)); piv = np.zeros(n, dtype=np.int64)
     nj = U.shape[1]
     p = int(cp[0])
@@ -309,6 +301,10 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     k = 1  # next output row
     while k < t_out.shape[0]:
         h = min(h, hmax)
+        h_try = h
+        land = method == RODAS and t + 1.001 * h >= t_out[k]  # RODAS ends its steps on the outputs
+        if land:
+            h = t_out[k] - t
         last = False
         if t + h >= t_final - 1e-12 * max(1.0, abs(t_final)):
             h = t_final - t
@@ -319,9 +315,9 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
         while True:
             if nsteps + nrej >= max_steps:
                 return WORK, k, nrhs, nsteps, nrej, t
-            if method == ROS4:
-                st_, err, nf = _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
-                                            ref, Y, xi, v, a, r, w, ys, k1, k2, k3, k4, tmp, xnew, rtol, atol)
+            if method != ODE23S:
+                st_, err, nf = _rosenbrock_stages(tab, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1,
+                                                  F2, u, ref, Y, xi, v, a, r, w, ys, K, tmp, xnew, rtol, atol)
             else:
                 st_, err, nf = _ode23s_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u,
                                               ref, Y, xi, v, a, r, w, ys, k1, k2, k3, tmp, xnew, rtol, atol)
@@ -333,7 +329,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             if st_ == 0 and err <= 1.0:
                 break
             nrej += 1
-            last = False
+            last = land = False
             if jac_age > 0:  # rejected with an old Jacobian: refresh it first
                 nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w,
                                   ys)
@@ -343,7 +339,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
                 return HMIN, k, nrhs, nsteps, nrej, t
         nsteps += 1
         jac_age += 1
-        t_new = t_final if last else t + h
+        t_new = t_final if last else (t_out[k] if land else t + h)
         st = check(xnew, u, lim)
         if st != OK:
             for i in range(n):
@@ -376,7 +372,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             x[i] = xnew[i]
             F0[i] = F2[i]
         fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** (1.0 / q_err)))
-        h = h * fac
+        h = max(h * fac, h_try) if land else h * fac  # a step cut to an output does not shrink the next
     return OK, t_out.shape[0], nrhs, nsteps, nrej, t
 
 
@@ -394,13 +390,13 @@ def _plant_rhs(x, u, kc, wk, fx, fric, xdot, tau):
 def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V, J, W, piv,
                   rtol, atol, budget):
     """Advance the plant ``x = (q, qd)`` (2n,) in place over one period ``Ts`` under the held torque ``ua`` by
-    adaptive ROS4 steps (:func:`_ros4_stages` on the plant alone, a forward-difference Jacobian per step,
+    adaptive ROS4 steps (:func:`_rosenbrock_stages` on the plant alone, a forward-difference Jacobian per step,
     error control as :func:`integrate_continuous`'s): L-stable, so a friction that damps a light joint in
     microseconds costs no more steps than the motion needs. ``hs[0]``: the step to try, carried from
     period to period. ``V`` (11, 2n), ``J``, ``W`` (2n, 2n), ``piv``: scratch. At most ``budget`` steps.
     Returns ``(status, n_f)``."""
     F0, F1, F2, Ft, Fp = V[0], V[1], V[2], V[3], V[4]
-    k1, k2, k3, k4, tmp, xnew = V[5], V[6], V[7], V[8], V[9], V[10]
+    K, tmp, xnew = V[5:9], V[9], V[10]
     if not _plant_rhs(x, ua, kc, wk, fx, fric, F0, tau):
         return NOTPD, 1
     nf, steps, t, err = 1, 0, 0.0, 0.0
@@ -412,8 +408,8 @@ def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a
             steps += 1
             if steps > budget:
                 return WORK, nf
-            st_, err, m = _ros4_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, ua, ref,
-                                       Y, xi, v, a, r, tau, ys, k1, k2, k3, k4, tmp, xnew, rtol, atol, True)
+            st_, err, m = _rosenbrock_stages(_ROS4, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2,
+                                             ua, ref, Y, xi, v, a, r, tau, ys, K, tmp, xnew, rtol, atol, True)
             nf += m
             if st_ == 2:
                 return HMIN, nf
