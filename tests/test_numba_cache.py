@@ -28,6 +28,23 @@ def test_hash_changes_with_any_numba_module_and_ignores_others(tmp_path):
     assert _numba_cache.package_hash(str(pkg)) == h1  # a module without numba code does not count
 
 
+def test_every_module_the_compiled_template_imports_counts_in_the_hash():
+    """Each rc3r module that engines/compiled.py imports from (kernels, status codes, the Rosenbrock tables'
+    plain constants, which numba freezes into the machine code) mentions numba, so package_hash covers
+    it: an edited table is recompiled, never served from a stale cache. (Found by a mutation run: a
+    RODAS coefficient edited in engines/_tableaux.py, a file that did not mention numba, left every
+    simulation bit-identical.)"""
+    import re
+
+    template = (SRC / "rc3r" / "simulate" / "engines" / "compiled.py").read_text()
+    mods = set(re.findall(r"^from (rc3r(?:\.\w+)+) import", template, flags=re.M))
+    assert "rc3r.simulate.engines._tableaux" in mods and len(mods) >= 5
+    for mod in sorted(mods):
+        path = SRC / Path(*mod.split("."))
+        path = path / "__init__.py" if path.is_dir() else path.with_suffix(".py")
+        assert b"numba" in path.read_bytes(), f"{mod} does not count in package_hash"
+
+
 def test_rc3r_kernels_use_the_package_stamp():
     """Every cached rc3r kernel's locator is one of ours, and its source stamp carries the hash."""
     from rc3r.simulate import status

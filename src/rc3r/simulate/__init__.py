@@ -10,9 +10,10 @@ Two **modes** (the result says which):
 Three **engines**:
 
 * ``fast`` -- the robot's compiled simulator (:attr:`Robot.fast_engine`; the paper's
-  arm has one: closed-form plant on the plant's theta, Rosenbrock ode23s for
-  continuous mode (steps of at most 1 ms, not clipped to the output grid: stored rows
-  are interpolated inside the steps), RK4 with ``nsub`` sub-steps per period for sampled mode, see
+  arm has one: closed-form plant on the plant's theta; for continuous mode Rosenbrock
+  steps of at most 1 ms, RODAS for the robust laws (steps ending on the output grid) and
+  ode23s for the others (stored rows interpolated inside the steps), :attr:`SimOptions.method`;
+  RK4 with ``nsub`` sub-steps per period for sampled mode, see
   :mod:`rc3r.robots.rr3.engine`). Needs a law with a compiled kernel.
 * ``python`` -- any robot, any law (also a user's law written in Python): the
   robot's own forward dynamics (Pinocchio ABA), SciPy ``Radau`` at ``rtol``/``atol``

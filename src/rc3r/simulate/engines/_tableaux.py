@@ -1,5 +1,7 @@
 r"""Rosenbrock tableaux of the compiled engine's continuous and stiff-period steps (plain constants; the
-compiled integrators of :mod:`.compiled` read them as compile-time arrays).
+compiled integrators of :mod:`.compiled` read them as compile-time arrays, which numba freezes into the
+cached machine code: this file mentions numba so that it counts in :func:`rc3r._numba_cache.package_hash`,
+the cache key, and an edited table is recompiled, not served stale).
 
 Each table is the transformed form of Hairer & Wanner, *Solving Ordinary Differential Equations II*
 (2nd ed., Springer 1996), sec. IV.7, as KPP's Rosenbrock integrators tabulate it:
