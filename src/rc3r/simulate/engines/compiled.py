@@ -95,12 +95,13 @@ def _joint_torque(fx, fric, qd, ua, tau):
 
 
 @njit(**_JIT)
-def closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys):
+def closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys, fresh=True):
     """xdot = f(t, x); fills ``u`` with the delivered torque (the law's, through the plant's actuator
     effects ``fx``; ``fric = _friction(fx, n)``) and ``ys[0] = ||Y^T r||``. Returns False if the plant M
-    is not PD."""
+    is not PD. ``fresh = False``: ``ref`` rows 0-2 already hold the reference at this t (not recomputed)."""
     n = u.shape[0]
-    reference_into(tp, t, ref)
+    if fresh:
+        reference_into(tp, t, ref)
     ys[0] = control(law, cp, x[0:n], x[n:2 * n], x[2 * n:], ref, kc, wk, u, xdot[2 * n:], Y, xi, v, a, r, w)
     actuate(fx, u, u)
     _joint_torque(fx, fric, x[n:2 * n], u, w)  # w (the law's additive term) is free again: the joint torque
@@ -110,12 +111,12 @@ def closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v,
 
 
 @njit(**_JIT)
-def _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys):
-    """:func:`closed_loop_rhs`, or if ``plant_only`` the plant alone (:func:`_plant_rhs`, x = (q, qd)) under
-    the held torque ``u`` (read, not written; ``w`` is scratch). Returns False if the plant M is not PD."""
+def _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys, fresh=True):
+    """:func:`closed_loop_rhs` (``fresh`` as there), or if ``plant_only`` the plant alone (:func:`_plant_rhs`,
+    x = (q, qd)) under the held torque ``u`` (read, not written; ``w`` is scratch). False if M is not PD."""
     if plant_only:
         return _plant_rhs(x, u, kc, wk, fx, fric, xdot, w)
-    return closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys)
+    return closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys, fresh)
 
 
 @njit(**_JIT)
@@ -128,7 +129,7 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
         dx = sqeps * max(abs(x[j]), 1e-3)
         xj = x[j]
         x[j] = xj + dx
-        _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys)
+        _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys, j == 0)
         x[j] = xj
         for i in range(n):
             J[i, j] = (Fp[i] - F0[i]) / dx
@@ -163,7 +164,7 @@ def _rosenbrock_stages(T, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp,
         W[i, i] += hg
     if not _lu_factor(W, piv):
         return 2, 1e300, 0
-    ok, nf = True, 0
+    ok, nf, at = True, 0, -1.0  # at: the stage time (in h) the reference in ref was last computed for
     F1[:] = F0
     for st in range(s):
         if T[st, 2] != 0.0:
@@ -173,8 +174,9 @@ def _rosenbrock_stages(T, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp,
                     acc += T[st, 3 + j] * K[j, i]
                 tmp[i] = acc
             ok &= _f(plant_only, t + T[st, 0] * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r,
-                     w, ys)
+                     w, ys, T[st, 0] != at)
             nf += 1
+            at = T[st, 0]
         for i in range(n):
             acc = 0.0
             for j in range(st):
@@ -194,7 +196,8 @@ def _rosenbrock_stages(T, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp,
     if not ok:
         return 1, err, nf
     if err <= 1.0:  # f at the new state: the next step's F0, the outputs' u
-        if not _f(plant_only, t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys):
+        if not _f(plant_only, t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys,
+                  at != 1.0):
             return 1, err, nf + 1
         return 0, err, nf + 1
     return 0, err, nf
