@@ -132,7 +132,7 @@ def test_descriptive_fields_are_copied_from_the_run():
     assert m["controller"] == "robust" and m["robot"] == "toy" and m["seed"] == 42
     assert m["theta_model"] == [1.0, 2.0] and m["rho"] == 3.0 and m["eps"] == 0.5
     assert m["gains"] == {"K": 100.0, "Lambda": 50.0}
-    assert m["t_end"] == 2.0 and m["tolerances"] == {"rtol": 1e-6, "atol": 1e-8}
+    assert m["t_end"] == 2.0 and m["tolerances"] == {"rtol": 1e-6, "atol": 1e-8, "method": "scipy Radau"}
     assert (m["rhs_evals"], m["steps"], m["wall_time_s"]) == (7, 3, 0.25)
 
 

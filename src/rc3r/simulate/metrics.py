@@ -99,7 +99,9 @@ def run_metrics(res, seed=None, tolerance=None) -> dict:
         "wall_time_s": float(res.wall_time_s),
         "rhs_evals": res.rhs_evals,
         "steps": res.steps,
-        "tolerances": {"rtol": res.options.rtol, "atol": res.options.atol} if res.mode == "continuous" else None,
+        "tolerances": {"rtol": res.options.rtol, "atol": res.options.atol,
+                       "method": res.options.method if res.engine == "fast" else "scipy Radau"}
+        if res.mode == "continuous" else None,
         "seed": seed,
         "effects": getattr(res, "robot", {}).get("effects", []),
         "loop": getattr(res, "loop", None),
