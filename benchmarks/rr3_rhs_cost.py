@@ -92,6 +92,25 @@ def main() -> None:
         tries = r.steps + r.rejected_steps
         print(f"  {method:8s} {jr:6d} {r.steps:7d} {r.rejected_steps:8d} {r.rhs_evals:7d} "
               f"{r.rhs_evals / tries:8.2f} {r.wall_time_s * 1e3:6.0f} ms")
+    reps = 9
+    walls = sorted(simulate(spec.plant, spec.law, spec.trajectory, opts).wall_time_s * 1e3 for _ in range(reps))
+    print(f"\nthe default (auto: rodas), simulate() {reps} times: walls {', '.join(f'{w:.0f}' for w in walls)} ms; "
+          f"median {walls[reps // 2]:.0f} ms")
+    from rc3r.simulate import _limits
+    from rc3r.simulate.engines.compiled import ODE23S, RODAS
+
+    t_out = np.linspace(0.0, 10.0, 10001)
+    print("one compiled integrate_continuous call over the 10 s (no 0.5 s chunks), best of 3:")
+    for name, m in (("rodas", RODAS), ("ode23s", ODE23S)):
+        X = np.zeros((t_out.size, 6)); U = np.zeros((t_out.size, 3)); R = np.zeros((t_out.size, 3))
+        yn = np.zeros(t_out.size)
+        best, out = 1e9, None
+        for _ in range(3):
+            t0 = time.perf_counter()
+            out = mod.integrate_continuous(x0.copy(), t_out, kc, fx, code, cp, tp, opts.rtol, opts.atol, 1e-5, 1e-3,
+                                           _limits(opts), X, U, R, yn, 5, 10 ** 7, m)
+            best = min(best, time.perf_counter() - t0)
+        print(f"  {name:8s} {out[3]:7d} steps {out[2]:7d} rhs {best * 1e3:6.1f} ms = {best / out[3] * 1e6:5.2f} us/step")
 
 
 def _timed(f, N, args) -> float:
