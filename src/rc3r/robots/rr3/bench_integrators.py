@@ -7,7 +7,7 @@ right-hand side (``closed_loop_xdot`` of that instantiation: closed-form plant, 
 trajectory) and the same tolerances (``rtol = 1e-6``, ``atol = 1e-8``):
 
 * ``rosenbrock, J every step`` -- MATLAB's ode23s scheme (``jac_reuse = 1``);
-* ``rosenbrock, J kept 5 steps`` -- the default (``jac_reuse = 5``);
+* ``rosenbrock, J kept 5 steps`` -- ode23s with ``jac_reuse = 5``, the default for FBL;
 * ``ros4, J every step`` / ``ros4, J kept 5 steps`` -- ``SimOptions(method="ros4")``, Hairer &
   Wanner's order-4 method (a Rosenbrock method, not a W-method: it wants the Jacobian of each step);
 * ``rodas, J every step`` -- ``SimOptions(method="rodas")``, Hairer & Wanner's stiffly accurate RODAS,

@@ -146,6 +146,7 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
 #: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
 ODE23S, ROS4, RODAS = 0, 1, 2
 
+
 @njit(**_JIT)
 def _rosenbrock_stages(T, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1, F2, u, ref, Y, xi, v, a, r,
                        w, ys, K, tmp, xnew, rtol, atol, plant_only=False):
@@ -264,7 +265,6 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     the new state before accepting it. RODAS takes a Jacobian every step (``jac_reuse`` is ignored) and ends
     its steps on the output times, so the stored rows are its own step ends (stiffly accurate: u there is
     the law's on the integrated state, not interpolated).
-    before accepting it.
     Returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``.
     ``ynorm[k]`` receives ``||Y^T r||`` at output k (robust laws).
     """
