@@ -84,10 +84,9 @@ def claims(rows: list[dict]) -> list[dict]:
              f"{mode[1] / 1000:g} kHz that period is too long for eps = 0.05 but not for 0.5, and the torque "
              "chatters (safe rate x eps is about 40-50 kHz, docs/robustness.md)") if sampled else
             ("in continuous time the boundary-layer law is a continuous function of the state and the "
-             "integrator follows it: it cannot chatter at any eps (the measure stays near the smooth torque's "
-             "1247 N m/s at eps = 0.01-0.5 with rtol 1e-8; what rises above it at small eps with the default "
-             "tolerances is integrator noise). The paper's chattering is a sampled-data effect: see the "
-             "sampled rows"),
+             "integrator follows it: it cannot chatter at any eps (the measure stays at the smooth torque's "
+             "1247-1249 N m/s for eps = 0.01-0.5: `rc3r sweep eps`, docs/robustness.md). The paper's "
+             "chattering is a sampled-data effect: see the sampled rows"),
         ]
         out += [{"mode": label, "claim": c, "holds": bool(h), "why": why, "explanation": note}
                 for (c, h, why), note in zip(checks, notes)]
