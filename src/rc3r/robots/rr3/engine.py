@@ -27,35 +27,20 @@ def pack(robot) -> np.ndarray:
 
 @njit(**_JIT)
 def make_work(kc):
-    """The 3x3 and 3-vector scratch of :func:`.kernels.forward_dynamics_into`, and the trigonometry of the
-    last q seen, ``[q2, q3, s2, c2, s3, c3, s23, c23]`` (NaN: none yet; :func:`_trig_of`)."""
-    return np.empty((3, 3)), np.empty(3), np.full(8, np.nan)
-
-
-@njit(**dict(_JIT, inline="always"))
-def _trig_of(q, cache):
-    """:func:`.kernels._trig` of (q[1], q[2]), computed once per distinct q: the law's regressor and the
-    plant's forward dynamics of one right-hand side, and the Jacobian's velocity columns, share it
-    (the same libm values, so every result is bit-identical to computing it each time)."""
-    if not (cache[0] == q[1] and cache[1] == q[2]):
-        cache[0] = q[1]; cache[1] = q[2]
-        cache[2], cache[3], cache[4], cache[5], cache[6], cache[7] = K._trig(q[1], q[2])
-    return cache[2], cache[3], cache[4], cache[5], cache[6], cache[7]
+    """The 3x3 and 3-vector scratch of :func:`.kernels.forward_dynamics_into`."""
+    return np.empty((3, 3)), np.empty(3)
 
 
 @njit(**dict(_JIT, inline="always"))
 def regressor_into(kc, q, qd, v, a, Y, wk):
     """Y (3, 15) of :func:`.kernels.slotine_li_scalars`."""
-    s2, c2, s3, c3, s23, c23 = _trig_of(q, wk[2])
-    K.slotine_li_from_trig(s2, c2, s3, c3, s23, c23, qd[0], qd[1], qd[2], v[0], v[1], v[2], a[0], a[1], a[2],
-                           kc[15], kc[16], Y)
+    K.slotine_li_scalars(q[1], q[2], qd[0], qd[1], qd[2], v[0], v[1], v[2], a[0], a[1], a[2], kc[15], kc[16], Y)
 
 
 @njit(**dict(_JIT, inline="always"))
 def forward_dynamics_into(kc, q, qd, tau, qdd, wk):
     """qdd of the closed form (theta = kc[:15]); False if M is not PD."""
-    s2, c2, s3, c3, s23, c23 = _trig_of(q, wk[2])
-    return K.forward_dynamics_from_trig(kc, s2, c2, s3, c3, s23, c23, qd, tau, kc[15], kc[16], qdd, wk[0], wk[1])
+    return K.forward_dynamics_into(kc, q, qd, tau, kc[15], kc[16], qdd, wk[0], wk[1])
 
 
 

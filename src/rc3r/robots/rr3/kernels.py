@@ -145,12 +145,6 @@ def slotine_li_scalars(q2, q3, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3, l2, g0, Y)
     creating (reference-counted) row views; every entry of ``Y`` is written exactly once.
     """
     s2, c2, s3, c3, s23, c23 = _trig(q2, q3)
-    slotine_li_from_trig(s2, c2, s3, c3, s23, c23, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3, l2, g0, Y)
-
-
-@njit(**_INLINE)
-def slotine_li_from_trig(s2, c2, s3, c3, s23, c23, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3, l2, g0, Y):
-    """:func:`slotine_li_scalars` from the sines and cosines of :func:`_trig` (a caller that has them)."""
     P12 = v1 * qd2 + qd1 * v2
     P13 = v1 * qd3 + qd1 * v3
     W = qd3 * v2 + (qd2 + qd3) * v3
@@ -239,15 +233,7 @@ def solve_spd3(M, b, x):
 @njit(**_JIT)
 def forward_dynamics_into(th, q, qd, u, l2, g0, qdd, work33, work3):
     """qdd = M^{-1} (u - S qd - g) with the closed form; False if M is not PD."""
-    s2, c2, s3, c3, s23, c23 = _trig(q[1], q[2])
-    return forward_dynamics_from_trig(th, s2, c2, s3, c3, s23, c23, qd, u, l2, g0, qdd, work33, work3)
-
-
-@njit(**_INLINE)
-def forward_dynamics_from_trig(th, s2, c2, s3, c3, s23, c23, qd, u, l2, g0, qdd, work33, work3):
-    """:func:`forward_dynamics_into` from the sines and cosines of :func:`_trig` (a caller that has them)."""
-    m11, m12, m13, m22, m23, h1, h2, h3 = _terms_from_trig(th, s2, c2, s3, c3, s23, c23, qd[0], qd[1], qd[2], l2,
-                                                           g0)
+    m11, m12, m13, m22, m23, h1, h2, h3 = _dynamics_terms(th, q[1], q[2], qd[0], qd[1], qd[2], l2, g0)
     work33[0, 0] = m11; work33[0, 1] = m12; work33[0, 2] = m13
     work33[1, 0] = m12; work33[1, 1] = m22; work33[1, 2] = m23
     work33[2, 0] = m13; work33[2, 1] = m23; work33[2, 2] = th[12]
