@@ -10,6 +10,10 @@ interpolated u is exact to ~1e-8 of max|u|); its q is checked against SciPy's Ra
 same compiled right-hand side (a different method), printed as ``yardstick vs Radau``. ``auto`` says
 which method the default (``SimOptions(method="auto")``, :func:`rc3r.simulate.continuous_method`) takes.
 The table of docs/performance.md ("Continuous-time methods") comes from this script.
+
+``--rtol R --atol A``: every method at those tolerances instead (the yardstick stays). ``--arms ur5,panda``:
+instead of the 3R table, the robust law on each named arm with a 0-3 kg payload (its default box and
+gains), ``--duration`` of continuous time, ode23s against RODAS: right-hand sides, wall and max|e|.
 """
 from __future__ import annotations
 
@@ -33,14 +37,29 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--rtol", type=float, default=None)
+    ap.add_argument("--atol", type=float, default=None)
+    ap.add_argument("--arms", default=None)
     args = ap.parse_args()
-    print(f"3R, perturbed unless 'ideal', {args.duration:g} s continuous, rtol 1e-6, atol 1e-8; wall best of "
+    if args.arms:
+        for arm in args.arms.split(","):
+            spec = build_run(robot=arm, payload=(0.0, 3.0), controller="robust", duration=args.duration)
+            for method in ("ode23s", "rodas"):
+                r = simulate(spec.plant, spec.law, spec.trajectory, replace(spec.options, method=method))
+                print(f"{arm:8s} robust, 0-3 kg, {args.duration:g} s continuous, {method:6s} {r.engine:6s} {r.status:8s} "
+                      f"steps {r.steps:7d} rhs {r.rhs_evals:8d} wall {r.wall_time_s:6.2f} s max|e| {np.abs(r.e).max():.4g} rad",
+                      flush=True)
+        return
+    tol = "rtol 1e-6, atol 1e-8" if args.rtol is None else f"rtol {args.rtol:g}, atol {args.atol or 1e-8:g}"
+    print(f"3R, perturbed unless 'ideal', {args.duration:g} s continuous, {tol}; wall best of "
           f"{args.repeats}; distances from ROS4 at rtol 1e-10 (du: / max|u|)")
     print(f"{'run':24s} {'method':6s} {'auto':4s} {'steps':>7s} {'rejected':>8s} {'rhs':>8s} {'wall':>8s} "
           f"{'dq':>8s} {'dqd':>8s} {'du':>8s}")
     for law, pert, eps in CASES:
         spec = build_run(controller=law, perturbed=pert, eps=eps, duration=args.duration)
         opts = replace(spec.options, engine="fast")
+        if args.rtol is not None:
+            opts = replace(opts, rtol=args.rtol, atol=args.atol if args.atol is not None else opts.atol)
         name = f"{law}{'' if eps is None else f'-eps{eps:g}'}-{'perturbed' if pert else 'ideal'}"
         ref = simulate(spec.plant, spec.law, spec.trajectory,
                        replace(opts, method="ros4", jac_reuse=1, rtol=1e-10, atol=1e-12, max_steps=1e8))
