@@ -75,8 +75,8 @@ def test_robust_laws_default_to_rodas_and_it_is_stiffly_accurate(plant, bounds, 
     layer and ode23s for the others, and on the paper's robust law (1.5 s, default tolerances) RODAS lands
     within 1e-9 rad of the Radau reference in q and within 5e-5 of max|u| in u (measured 1.3e-10 and 1.4e-5;
     ode23s there: 2.4e-8 and 2.3e-4): its steps end on the output times and it is stiffly accurate, so the
-    stored u is the law's own at an accurate state. An order-3 RODAS (a wrong coefficient) or interpolated
-    torques fail the bounds."""
+    stored u is the law's own at an accurate state. A mistyped coefficient fails the bounds (c54 off by 0.01:
+    5.4e-6 rad, docs/testing.md)."""
     from rc3r.controllers.ellipsoid import RobustEllipsoid
     from rc3r.simulate import continuous_method
 
