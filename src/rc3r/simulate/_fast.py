@@ -245,6 +245,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
         hmax = HMAX
         per = max(1, int(round(CHUNK_S * opt.output_rate)))
         start, stored, st, t_end, counts = 0, 0, S.OK, 0.0, np.zeros(3, dtype=np.int64)
+        method = METHODS[continuous_method(law, opt).method]  # once per run, not per chunk
         try:
             while True:
                 end = min(start + per, nout - 1)
@@ -252,7 +253,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 st_k, m, nrhs, nsteps, nrej, t_k = eng.continuous(
                     rigid, fx, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, 1e-5, hmax,
                     lim, X[start:end + 1], U[start:end + 1], R[start:end + 1], yn[start:end + 1], opt.jac_reuse,
-                    budget, kc=kc, method=METHODS[continuous_method(law, opt).method])
+                    budget, kc=kc, method=method)
                 counts += (nrhs, nsteps, nrej)
                 stored, st, t_end = start + m, st_k, t_k
                 if st != S.OK or end == nout - 1:

@@ -100,7 +100,8 @@ def run_metrics(res, seed=None, tolerance=None) -> dict:
         "rhs_evals": res.rhs_evals,
         "steps": res.steps,
         "tolerances": {"rtol": res.options.rtol, "atol": res.options.atol,
-                       "method": res.options.method if res.engine == "fast" else "scipy Radau"}
+                       "method": res.options.method if res.engine == "fast"  # another engine: None
+                       else {"python": "scipy Radau", "reference": "scipy Radau"}.get(res.engine)}
         if res.mode == "continuous" else None,
         "seed": seed,
         "effects": getattr(res, "robot", {}).get("effects", []),
