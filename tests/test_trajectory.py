@@ -30,6 +30,23 @@ def test_derivatives_are_consistent(name):
         np.testing.assert_allclose((qdp - qdm) / (2 * h), qdd, atol=1e-5)
 
 
+@pytest.mark.parametrize("name", TRAJS)
+def test_jerk_is_the_derivative_of_the_acceleration(name):
+    """reference_jerk_into = d qdd_d/dt (central differences, h = 1e-5: error ~h^2 |q^(5)| <= ~1e-7 here), inside
+    the quintic's segments and past its end (held: 0); the analytic Jacobian's time column uses it."""
+    from rc3r.trajectory import reference_jerk_into
+
+    tr = TRAJS[name]
+    tp = tr.pack()
+    h = 1e-5
+    for t in list(np.linspace(0.05, 3.4, 23)) + [4.0]:
+        jerk = np.empty(tr.n)
+        reference_jerk_into(tp, t, jerk)
+        dq = (tr.evaluate(t + h)[2] - tr.evaluate(t - h)[2]) / (2 * h)
+        np.testing.assert_allclose(jerk, dq, atol=1e-5)
+    assert name != "quintic" or not np.any(jerk)  # t = 4.0 is past the quintic's 3.5 s
+
+
 def test_paper_trajectory_values():
     """q_d = (sin t, 5 cos t, sin t), qd_d = (cos t, -5 sin t, cos t) (section 3.3)."""
     for t in (0.0, 0.7, 3.0):

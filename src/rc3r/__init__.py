@@ -21,6 +21,8 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.rr3.model``              closed-form M, S, g
 ``rc3r.robots.rr3.regressor``          closed-form Slotine--Li and inverse-dynamics regressors
 ``rc3r.robots.rr3.urdf``               URDF writer and reader with the DH structure checks
+``rc3r.robots.rr3.tangents``           d(Y theta)/d(q, qd, v, a) of the closed form, generated (numba)
+``rc3r.robots.rr3.tangents_gen``       writes that module with SymPy from the closed form
 ``rc3r.robots.rr3.robot``              :class:`RR3`, the contract's implementation
 ``rc3r.robots.rr3.engine``             the 3R's kernel supply of the compiled engine
 ``rc3r.robots.rr3.paper``              the paper's box, gains, trajectory, sampled rate (the robot's data)
@@ -73,6 +75,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.engines.compiled``     Rosenbrock (ode23s, ROS4, RODAS) and ZOH (RK4 or ROS4 periods) integrators, any n, p (numba)
 ``rc3r.simulate.engines._template``    the kernel supply contract, as stubs
 ``rc3r.simulate.engines._linalg``      dense LU of the compiled integrators (kernel-independent)
+``rc3r.simulate.engines._jacobian``    the closed loop's analytic Jacobian by the chain rule (kernel-independent)
 ``rc3r.simulate.engines._tableaux``    the ROS4 and RODAS tables of those integrators (plain constants)
 ``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)
 ``rc3r.simulate.metrics``              scalar metrics of a run

@@ -24,7 +24,7 @@ from ._numba_cache import ready_or_python
 
 from .errors import ConfigError
 
-__all__ = ["Trajectory", "Sines", "Quintic", "trajectory_from_config", "reference_into"]
+__all__ = ["Trajectory", "Sines", "Quintic", "trajectory_from_config", "reference_into", "reference_jerk_into"]
 
 _SINES, _QUINTIC = 0.0, 1.0
 
@@ -79,6 +79,38 @@ def reference_into(tp, t, ref):
             ref[0, i] = tp[a + i] + d * s
             ref[1, i] = d * ds
             ref[2, i] = d * dds
+
+
+@njit(cache=True, nogil=True)
+def reference_jerk_into(tp, t, jerk):
+    """Fill ``jerk`` (n,) with the third derivative of q_d at ``t`` [rad/s^3] (the analytic Jacobian's
+    time column, :mod:`rc3r.simulate.engines._jacobian`), from the same packed ``tp`` as :func:`reference_into`."""
+    n = jerk.shape[0]
+    if tp[0] == 0.0:
+        K = int(tp[1])
+        for i in range(n):
+            acc = 0.0
+            base = 2 + n + i * K * 3
+            for k in range(K):
+                A = tp[base + 3 * k]
+                w = tp[base + 3 * k + 1]
+                acc -= A * w * w * w * math.cos(w * t + tp[base + 3 * k + 2])
+            jerk[i] = acc
+        return
+    nseg = int(tp[1])
+    t0 = 0.0
+    for k in range(nseg):
+        if t < t0 + tp[2 + k]:
+            T = tp[2 + k]
+            tau = max(0.0, (t - t0) / T)
+            ddds = (60.0 - 360.0 * tau + 360.0 * tau * tau) / (T * T * T)
+            a = 2 + nseg + n * k
+            for i in range(n):
+                jerk[i] = (tp[a + n + i] - tp[a + i]) * ddds
+            return
+        t0 += tp[2 + k]
+    for i in range(n):
+        jerk[i] = 0.0
 
 
 class Trajectory:

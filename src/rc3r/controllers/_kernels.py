@@ -152,3 +152,48 @@ def apply_regressor(Y, th_eff, w, u):
         for j in range(p):
             acc += Y[i, j] * th_eff[j]
         u[i] = w[i] + acc
+
+
+# ---- derivatives, for the compiled engine's analytic Jacobian (rc3r.simulate.engines._jacobian) ----
+
+
+@njit(**_INLINE)
+def law_slopes(code, cp, n, ref, jerk, G, Wx):
+    r"""Slopes of the law's signals in the state and time, for a law with ``inertia_gain == 0``.
+
+    ``G`` (3, n, 3): ``G[k, j] = (d s_j/d q_j, d s_j/d qd_j, d s_j/d t)`` for the signals
+    ``s = v, a, r`` (k = 0, 1, 2); each depends on joint j's own q, qd only (diagonal gains).
+    ``Wx`` (n, 2n + 1): ``dw/d(q, qd, t)`` of the additive term (the full K of a sliding law).
+    ``ref`` rows q_d, qd_d, qdd_d and ``jerk`` (n,) its third derivative at t.
+    """
+    p = int(cp[0])
+    g = 1 + p
+    for i in range(n):
+        for c in range(2 * n + 1):
+            Wx[i, c] = 0.0
+    if code == FBL:  # v = qd, a = qdd_d + Kd (qd_d - qd) + Kp (q_d - q)
+        for j in range(n):
+            kp, kd = cp[g + j], cp[g + n + j]
+            G[0, j, 0], G[0, j, 1], G[0, j, 2] = 0.0, 1.0, 0.0
+            G[1, j, 0], G[1, j, 1], G[1, j, 2] = -kp, -kd, jerk[j] + kd * ref[2, j] + kp * ref[1, j]
+            G[2, j, 0], G[2, j, 1], G[2, j, 2] = 0.0, 0.0, 0.0
+    elif code == PD:  # v = a = 0, w = Kp (q_d - q) + Kd (qd_d - qd)
+        for j in range(n):
+            kp, kd = cp[g + j], cp[g + n + j]
+            for k in range(3):
+                G[k, j, 0], G[k, j, 1], G[k, j, 2] = 0.0, 0.0, 0.0
+            Wx[j, j], Wx[j, n + j], Wx[j, 2 * n] = -kp, -kd, kp * ref[1, j] + kd * ref[2, j]
+    else:  # v = qd_d - L e, a = qdd_d - L e_dot, r = e_dot + L e, w = -K r
+        for j in range(n):
+            lam = cp[g + n + j]
+            G[0, j, 0], G[0, j, 1], G[0, j, 2] = -lam, 0.0, ref[2, j] + lam * ref[1, j]
+            G[1, j, 0], G[1, j, 1], G[1, j, 2] = 0.0, -lam, jerk[j] + lam * ref[2, j]
+            G[2, j, 0], G[2, j, 1], G[2, j, 2] = lam, 1.0, -(ref[2, j] + lam * ref[1, j])
+        o = tail(code, cp, n)
+        full = cp[o + 1] != 0.0
+        for i in range(n):
+            for j in range(n):
+                kij = (cp[g + i] if i == j else 0.0) + (cp[o + 2 + i * n + j] if full else 0.0)
+                Wx[i, j] = -kij * G[2, j, 0]
+                Wx[i, n + j] = -kij
+                Wx[i, 2 * n] -= kij * G[2, j, 2]

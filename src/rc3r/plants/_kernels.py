@@ -46,3 +46,23 @@ def measure(x, k, noise, quant, qm, qdm):
         qdm[j] = x[n + j] + (noise[k, n + j] if noisy else 0.0)
         if quant[j] > 0.0:
             qm[j] = quant[j] * np.rint(qm[j] / quant[j])
+
+
+@njit(**_JIT)
+def has_friction(fx, n):
+    """True if ``fx`` has a joint torque (viscous, Coulomb or offset friction) on some joint."""
+    for j in range(3 * n):
+        if fx[j] != 0.0:
+            return True
+    return False
+
+
+@njit(**dict(_JIT, inline="always"))
+def joint_torque(fx, fric, qd, ua, tau):
+    """``tau`` = the joint torque for the delivered ``ua``: :func:`~rc3r.plants._kernels.apply_effects`
+    if ``fric`` (:func:`has_friction`), else ``ua`` itself (what apply_effects returns then, ``ua - 0``, without its tanh calls)."""
+    if fric:
+        apply_effects(fx, qd, ua, tau)
+    else:
+        for j in range(ua.shape[0]):
+            tau[j] = ua[j]

@@ -54,6 +54,12 @@ HMAX = 0.001
 MARKER = ("from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, "
           "make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply")
 
+#: The optional line: a supply with analytic derivatives (``tangents_into``, ``plant_tangents_into``) names
+#: itself there too, one without keeps the stubs of :mod:`.engines._template` (numerical Jacobian).
+TANGENT_MARKER = ("from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, "
+                  "tangents_into as _tangents  # kernel supply (optional)")
+_TANGENTS = ("tangents_into", "plant_tangents_into")
+
 #: Age [s] past which an instantiation of another package version is removed.
 STALE_S = 86400.0
 
@@ -125,9 +131,11 @@ def instantiate(module: str):
     if missing:
         raise ParameterError(f"kernel supply {module!r} lacks {', '.join(missing)} (rc3r.simulate.engines._template)")
     template = (Path(__file__).resolve().parent / "engines" / "compiled.py").read_text()
-    if template.count(MARKER) != 1:
-        raise RuntimeError("rc3r.simulate.engines.compiled lost its kernel-supply line")
+    if template.count(MARKER) != 1 or template.count(TANGENT_MARKER) != 1:
+        raise RuntimeError("rc3r.simulate.engines.compiled lost a kernel-supply line")
     source = template.replace(MARKER, MARKER.replace("rc3r.simulate.engines._template", module))
+    if all(hasattr(supply, f) for f in _TANGENTS):
+        source = source.replace(TANGENT_MARKER, TANGENT_MARKER.replace("rc3r.simulate.engines._template", module))
     h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode() + source.encode())
     supply_file = getattr(supply, "__file__", None)
     if supply_file and not _numba_cache._inside(supply_file):  # outside the package: its own source counts
@@ -246,18 +254,20 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
         per = max(1, int(round(CHUNK_S * opt.output_rate)))
         start, stored, st, t_end, counts = 0, 0, S.OK, 0.0, np.zeros(3, dtype=np.int64)
         method = METHODS[continuous_method(law, opt).method]  # once per run, not per chunk
+        h0 = 1e-5  # the first step; a later chunk starts at its predecessor's mean step, not from 1e-5 again
         try:
             while True:
                 end = min(start + per, nout - 1)
                 budget = max(1000, int(np.ceil(opt.max_steps * (t_out[end] - t_out[start]))))
                 st_k, m, nrhs, nsteps, nrej, t_k = eng.continuous(
-                    rigid, fx, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, 1e-5, hmax,
+                    rigid, fx, code, cp, tp, X[start].copy(), t_out[start:end + 1], opt.rtol, opt.atol, h0, hmax,
                     lim, X[start:end + 1], U[start:end + 1], R[start:end + 1], yn[start:end + 1], opt.jac_reuse,
                     budget, kc=kc, method=method)
                 counts += (nrhs, nsteps, nrej)
                 stored, st, t_end = start + m, st_k, t_k
                 if st != S.OK or end == nout - 1:
                     break
+                h0 = min(hmax, max(1e-5, (t_k - t_out[start]) / max(int(nsteps), 1)))
                 start = end
         except KeyboardInterrupt:
             st = S.INTERRUPTED

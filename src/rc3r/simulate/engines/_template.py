@@ -75,3 +75,24 @@ def mass_into(kc, q, th, r, out, Y, wk):
     """Fill ``out`` (n,) with ``M_th(q) r`` (the mass matrix of the parameters ``th``), called after
     :func:`passes_into` at the same ``q`` (whose kinematics a supply may reuse)."""
     out[:] = np.nan
+
+
+# ---- optional: analytic derivatives (the second import line of :mod:`.compiled`) ----------------
+# A supply that defines both functions below gets the analytic closed-loop Jacobian of
+# :mod:`rc3r.simulate.engines._jacobian`; one that does not keeps these stubs, and the engine
+# differentiates its right-hand side numerically (forward differences), as before.
+
+
+@njit(**_JIT)
+def tangents_into(kc, th, q, qd, v, a, D, wk):
+    """``D`` (n, 4n) = d(Y(q, qd, v, a) th)/d(q, qd, v, a) at fixed ``th`` (p,), any ``th`` (the engine also
+    calls it at directions that are not parameter sets). False: no analytic derivatives."""
+    return False
+
+
+@njit(**_JIT)
+def plant_tangents_into(kc, q, qd, qdd, D, wk):
+    """``D`` (n, 4n) as :func:`tangents_into` at the plant's own parameters and ``(v, a) = (qd, qdd)``:
+    columns 0..2n-1 and 2n..3n-1 give d(M(q) qdd + C(q, qd) qd + g(q))/d(q, qd), columns 3n.. give
+    M(q). False: no analytic derivatives."""
+    return False

@@ -3,36 +3,30 @@ r"""The compiled engine's integrators, written once for any n and p (numba): a t
 State ``x = (q, qd, z)``: joint positions [rad], velocities [rad/s] and the controller state
 ``z`` (the adaptive law's theta estimate; empty otherwise).
 
-* :func:`integrate_continuous` -- the controller inside the integrator (continuous
-  time). The robust law's boundary layer makes the loop stiff (gain ``rho/eps Y Y^T``
-  ~ 1e6), so the integrator is the L-stable Rosenbrock pair of Shampine & Reichelt,
-  "The MATLAB ODE Suite", SIAM J. Sci. Comput. 18 (1997) (MATLAB's ode23s): order 2
-  step, order 3 error estimate, Jacobian by forward differences, kept for
-  ``jac_reuse`` accepted steps (refreshed after a rejection; 1 = every step as ode23s).
-  Steps are not clipped to the output times: the stored rows are the cubic Hermite
-  interpolant of the two ends of the step that contains them (third order, like the step).
-  At most ``max_steps`` steps per call (the work budget). ``method = ROS4``
-  (``SimOptions(method="ros4")``): Hairer & Wanner's L-stable order-4 Rosenbrock method with
-  an order-3 embedded solution, same Jacobian, step control and outputs.
-* :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and
-  held (zero-order hold); the plant is integrated over each period by classical RK4
-  with ``nsub`` sub-steps, or for a stiff plant by adaptive ROS4 steps on the plant alone
-  (:func:`_stiff_period`, ``SimOptions.sampled_method``); the controller state is updated by
-  forward Euler.
+* :func:`integrate_continuous` -- the controller inside the integrator (continuous time). The robust
+  law's boundary layer makes the loop stiff (gain ``rho/eps Y Y^T`` ~ 1e6), so the integrators are
+  L-stable Rosenbrock methods (``SimOptions.method``): ode23s (Shampine & Reichelt, "The MATLAB ODE
+  Suite", SIAM J. Sci. Comput. 18 (1997); order 2, a W-method, so its Jacobian may be kept for
+  ``jac_reuse`` accepted steps), ROS4 and RODAS (Hairer & Wanner; order 4, RODAS stiffly accurate).
+  The Jacobian is analytic where the kernel supply has derivatives (:func:`_tangent_jacobian`,
+  :mod:`._jacobian`), else by forward differences (:func:`_jacobian`). Stored rows between step ends
+  are cubic Hermite interpolants (RODAS ends its steps on them). At most ``max_steps`` steps per call.
+* :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and held (zero-order
+  hold); the plant is integrated over each period by classical RK4 with ``nsub`` sub-steps, or for a
+  stiff plant by adaptive ROS4 steps on the plant alone (:func:`_stiff_period`); the controller state
+  is updated by forward Euler.
 
-The plant's effects (friction, saturation: the fields ``fx`` of
-:meth:`rc3r.plants.Plant.pack`) and the loop's (noise, quantization, delay line) are applied
-by :mod:`rc3r.plants._kernels`; the law by the generic kernels of
-:mod:`rc3r.controllers._kernels` (selected by its integer code). The robot enters only
-through its **kernel supply** (:mod:`._template` states the contract): ``_make_work``,
-``_passes``, ``_xi``, ``_apply``, ``_mass`` and ``_fd`` below, on its packed constants ``kc``. n is ``U.shape[1]``, p is
-``cp[0]``.
+The plant's effects (friction, saturation: the fields ``fx`` of :meth:`rc3r.plants.Plant.pack`) and the
+loop's (noise, quantization, delay line) are applied by :mod:`rc3r.plants._kernels`; the law by the
+generic kernels of :mod:`rc3r.controllers._kernels` (selected by its integer code). The robot enters
+only through its **kernel supply** (:mod:`._template` states the contract) on its packed constants
+``kc``. n is ``U.shape[1]``, p is ``cp[0]``.
 
-This module is never run as it stands: the import line marked ``# kernel supply`` names the
-stubs of :mod:`._template`, and :func:`rc3r.simulate._fast.instantiate` writes a copy of this
-source per supply with that one line naming the supply's module (numba caches a module on
-disk, but not a function that receives another jitted function, nor a closure over one). So
-every import here is absolute. Status codes: :mod:`rc3r.simulate.status`.
+This module is never run as it stands: the import lines marked ``# kernel supply`` name the stubs of
+:mod:`._template`, and :func:`rc3r.simulate._fast.instantiate` writes a copy of this source per supply
+with those lines naming the supply's module (numba caches a module on disk, but not a function that
+receives another jitted function, nor a closure over one). So every import here is absolute. Status
+codes: :mod:`rc3r.simulate.status`.
 """
 from __future__ import annotations
 
@@ -41,13 +35,15 @@ import math
 import numpy as np
 from numba import njit
 
-from rc3r.controllers._kernels import inertia_gain, law_signals, law_theta, uses_xi
-from rc3r.plants._kernels import actuate, apply_effects, measure
+from rc3r.controllers._kernels import inertia_gain, law_signals, law_slopes, law_theta, uses_xi
+from rc3r.plants._kernels import actuate, has_friction as _friction, joint_torque as _joint_torque, measure
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
+from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, tangents_into as _tangents  # kernel supply (optional)
+from rc3r.simulate.engines._jacobian import compose, work as _tangent_work, xi_rows
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
 from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
-from rc3r.trajectory import reference_into
+from rc3r.trajectory import reference_into, reference_jerk_into
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -72,26 +68,6 @@ def control(law, cp, q, qd, z, ref, kc, wk, u, zdot, Y, th_eff, v, a, r, w):
     yn = law_theta(law, cp, q.shape[0], z, th_eff, zdot)
     _apply(kc, Y, th_eff, w, u, wk)
     return yn
-
-
-@njit(**_JIT)
-def _friction(fx, n):
-    """True if ``fx`` has a joint torque (viscous, Coulomb or offset friction) on some joint."""
-    for j in range(3 * n):
-        if fx[j] != 0.0:
-            return True
-    return False
-
-
-@njit(**dict(_JIT, inline="always"))
-def _joint_torque(fx, fric, qd, ua, tau):
-    """``tau`` = the joint torque for the delivered ``ua``: :func:`~rc3r.plants._kernels.apply_effects`
-    if ``fric``, else ``ua`` itself (what apply_effects returns then, ``ua - 0``, without its tanh calls)."""
-    if fric:
-        apply_effects(fx, qd, ua, tau)
-    else:
-        for j in range(ua.shape[0]):
-            tau[j] = ua[j]
 
 
 @njit(**_JIT)
@@ -120,9 +96,12 @@ def _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, 
 
 
 @njit(**_JIT)
-def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, plant_only=False):
-    """J = df/dx and Ft = df/dt at (t, x) by forward differences (F0 = f(t, x); ``plant_only``: f of
-    :func:`_f`, autonomous, so Ft = 0 without an evaluation). Returns the evaluations of f made."""
+def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, tw, plant_only=False):
+    """J = df/dx and Ft = df/dt at (t, x) (F0 = f(t, x); ``plant_only``: f of :func:`_f`, autonomous, so
+    Ft = 0): by :func:`_tangent_jacobian` if it can (``tw``: :func:`._jacobian.work`), else by forward
+    differences. Returns the evaluations of f made (0 for the analytic one)."""
+    if not plant_only and _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, xi, v, a, r, w, tw):
+        return 0
     n = x.shape[0]
     sqeps = math.sqrt(2.220446049250313e-16)
     for j in range(n):
@@ -141,6 +120,30 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
     for i in range(n):
         Ft[i] = (Fp[i] - F0[i]) / dt
     return n + 1
+
+
+@njit(**_JIT)
+def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v, a, r, w, tw):
+    """J and Ft at (t, x) by the chain rule (:mod:`._jacobian`) on the supply's ``tangents_into`` and
+    ``plant_tangents_into`` (such a supply forms ``Y`` in ``passes_into``); False (nothing usable written) if
+    it has none or the law schedules K by M(q). ``u``, ``ref``, ``Y``, ``th``, ``v``, ``a``, ``r``, ``w``:
+    scratch, as in :func:`control`. d(Y^T r) enters only contracted, ``tb^T d(Y^T r) = r^T d(Y tb)``, so
+    each row it needs is one more ``tangents_into`` at ``tb``: n + 1 for the robust laws, p for the adaptive."""
+    n = u.shape[0]
+    D, Dp, G, Wx, jerk = tw[0], tw[1], tw[3], tw[4], tw[7]
+    if inertia_gain(law, cp, n) > 0.0:
+        return False
+    q, qd = x[0:n], x[n:2 * n]
+    reference_into(tp, t, ref)
+    reference_jerk_into(tp, t, jerk)
+    control(law, cp, q, qd, x[2 * n:], ref, kc, wk, u, Ft[2 * n:], Y, th, v, a, r, w)
+    if not (_tangents(kc, th, q, qd, v, a, D, wk) and _ptangents(kc, q, qd, F0[n:2 * n], Dp, wk)):
+        return False
+    law_slopes(law, cp, n, ref, jerk, G, Wx)
+    rows = xi_rows(law, cp, Y, r, tw)  # the directions b whose r^T d(Y b)/dz the law needs (tw[8])
+    for i in range(rows):
+        _tangents(kc, tw[8][i], q, qd, v, a, tw[13][i], wk)
+    return compose(law, cp, fx, x, u, Y, r, rows, tw, J, Ft)
 
 
 #: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
@@ -281,6 +284,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     nj = U.shape[1]
     p = int(cp[0])
     wk = _make_work(kc)
+    tw = _tangent_work(nj, p, n - 2 * nj)
     fric = _friction(fx, nj)
     u = np.empty(nj); ref = np.empty((6, nj)); Y = np.empty((nj, p)); xi = np.empty(p)
     v = np.empty(nj); a = np.empty(nj); r = np.empty(nj); w = np.empty(nj)
@@ -313,7 +317,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             h = t_final - t
             last = True
         if jac_age >= jac_reuse:
-            nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys)
+            nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, tw)
             jac_age = 0
         while True:
             if nsteps + nrej >= max_steps:
@@ -335,7 +339,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             last = land = False
             if jac_age > 0:  # rejected with an old Jacobian: refresh it first
                 nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w,
-                                  ys)
+                                  ys, tw)
                 jac_age = 0
             h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / q_err)) if err < 1e300 else 0.1 * h
             if h < 1e-14 * max(1.0, abs(t)):
@@ -391,7 +395,7 @@ def _plant_rhs(x, u, kc, wk, fx, fric, xdot, tau):
 
 @njit(**_JIT)
 def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V, J, W, piv,
-                  rtol, atol, budget):
+                  rtol, atol, budget, tw):
     """Advance the plant ``x = (q, qd)`` (2n,) in place over one period ``Ts`` under the held torque ``ua`` by
     adaptive ROS4 steps (:func:`_rosenbrock_stages` on the plant alone, a forward-difference Jacobian per step,
     error control as :func:`integrate_continuous`'s): L-stable, so a friction that damps a light joint in
@@ -406,7 +410,8 @@ def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a
     while t < Ts * (1.0 - 1e-12):
         h = min(hs[0], Ts - t)
         cut = h < hs[0]
-        nf += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, ua, ref, Y, xi, v, a, r, tau, ys, True)
+        nf += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, ua, ref, Y, xi, v, a, r, tau, ys, tw,
+                        True)
         while True:
             steps += 1
             if steps > budget:
@@ -454,6 +459,7 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     n2 = 2 * nj
     p = int(cp[0])
     wk = _make_work(kc)
+    tw = _tangent_work(nj, p, 0)  # the plant-only Jacobian is numerical: unused
     fric = _friction(fx, nj)
     x = x0.copy()
     zdot = np.zeros(max(n - n2, 0))
@@ -496,7 +502,7 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
             break
         if stiff:
             st, m = _stiff_period(xp, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V,
-                                  J, W, piv, rtol, atol, budget)
+                                  J, W, piv, rtol, atol, budget, tw)
             nrhs += m
             if st != OK:
                 return st, stored, nrhs, s, t
