@@ -129,3 +129,26 @@ def test_a_supply_without_tangents_falls_back_to_differences():
     assert mod._tangents.__module__ == "rc3r.simulate.engines._template"
     assert instantiate("rc3r.robots.rr3.engine")._tangents.__module__ == "rc3r.robots.rr3.engine"
     assert "# kernel supply (optional)" in TANGENT_MARKER
+
+
+@pytest.mark.parametrize("case", ["robust-outside-layer", "robust-inside-layer", "adaptive", "fbl"])
+def test_warm_jacobian_equals_cold(case, rng):
+    """warm=True (the integrator's call right after f at the same (t, x): the law is not evaluated again, its
+    values are read from the scratch f left, u being the delivered torque) gives the cold call's J and f_t
+    bit for bit, with a clipped joint."""
+    controller, eps, off = CASES[case]
+    spec, mod, n, cp, tp, code, kc, fx, x0 = _setup(controller, eps)
+    x = x0 + off * rng.uniform(-1, 1, x0.size)
+    t, p, N = 0.37, int(cp[0]), x0.size
+    fx = fx.copy()
+    u0 = _f(mod, t, x, kc, fx, code, cp, tp, n)[1]
+    fx[3 * n + 1:] = 2.0 * np.abs(u0) + 1.0
+    fx[3 * n + 1] = 0.5 * abs(u0[0])
+    ok, J, Ft = _analytic(mod, t, x, kc, fx, code, cp, tp, n)
+    wk = mod._make_work(kc)
+    S = _scratch(n, p)
+    F0 = np.empty(N)
+    assert mod.closed_loop_rhs(t, x, kc, wk, fx, False, code, cp, tp, F0, *S)
+    Jw, Ftw = np.full((N, N), np.nan), np.full(N, np.nan)
+    assert mod._tangent_jacobian(t, x, kc, wk, fx, code, cp, tp, Jw, Ftw, F0, *S[:8], work(n, p, N - 2 * n), True)
+    assert ok and np.array_equal(J, Jw) and np.array_equal(Ft, Ftw)

@@ -77,7 +77,7 @@ def finish(fx, u, x, Dp, Ux, Xi, gam, J, Ft, Mw, piv):
     vs = fx[3 * n]
     for i in range(n):
         lim = fx[3 * n + 1 + i]
-        if u[i] > lim or u[i] < -lim:  # clipped: the delivered torque does not move
+        if abs(u[i]) >= lim:  # clipped (u: the law's torque or the delivered one): the delivered torque does not move
             for c in range(m + nz):
                 Ux[i, c] = 0.0
         if fx[i] != 0.0 or fx[n + i] != 0.0:  # tau = u_a - (F_v qd + F_c tanh(qd / v_s) + offset)

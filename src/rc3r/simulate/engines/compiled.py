@@ -1,32 +1,24 @@
-r"""The compiled engine's integrators, written once for any n and p (numba): a template.
-
-State ``x = (q, qd, z)``: joint positions [rad], velocities [rad/s] and the controller state
-``z`` (the adaptive law's theta estimate; empty otherwise).
+r"""The compiled engine's integrators, written once for any n and p (numba): a template. State
+``x = (q, qd, z)``: positions [rad], velocities [rad/s], the controller state (the adaptive law's estimate).
 
 * :func:`integrate_continuous` -- the controller inside the integrator (continuous time). The robust
   law's boundary layer makes the loop stiff (gain ``rho/eps Y Y^T`` ~ 1e6), so the integrators are
-  L-stable Rosenbrock methods (``SimOptions.method``): ode23s (Shampine & Reichelt, "The MATLAB ODE
-  Suite", SIAM J. Sci. Comput. 18 (1997); order 2, a W-method, so its Jacobian may be kept for
-  ``jac_reuse`` accepted steps), ROS4 and RODAS (Hairer & Wanner; order 4, RODAS stiffly accurate).
-  The Jacobian is analytic where the kernel supply has derivatives (:func:`_tangent_jacobian`,
-  :mod:`._jacobian`), else by forward differences (:func:`_jacobian`). Stored rows between step ends
-  are cubic Hermite interpolants (RODAS ends its steps on them). At most ``max_steps`` steps per call.
-* :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and held (zero-order
-  hold); the plant is integrated over each period by classical RK4 with ``nsub`` sub-steps, or for a
-  stiff plant by adaptive ROS4 steps on the plant alone (:func:`_stiff_period`); the controller state
-  is updated by forward Euler.
+  L-stable Rosenbrock methods (``SimOptions.method``): ode23s (Shampine & Reichelt, SIAM J. Sci. Comput.
+  18 (1997); order 2, a W-method, so its Jacobian may be kept ``jac_reuse`` steps), ROS4 and RODAS
+  (Hairer & Wanner; order 4, RODAS stiffly accurate, ending its steps on the outputs). The Jacobian is
+  analytic where the kernel supply has derivatives (:func:`_tangent_jacobian`), else by forward
+  differences (:func:`_jacobian`). Other stored rows are cubic Hermite interpolants.
+* :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and held; the plant is
+  integrated over each period by RK4 with ``nsub`` sub-steps, or for a stiff plant by adaptive ROS4
+  steps on the plant alone (:func:`_stiff_period`); the controller state by forward Euler.
 
-The plant's effects (friction, saturation: the fields ``fx`` of :meth:`rc3r.plants.Plant.pack`) and the
-loop's (noise, quantization, delay line) are applied by :mod:`rc3r.plants._kernels`; the law by the
-generic kernels of :mod:`rc3r.controllers._kernels` (selected by its integer code). The robot enters
-only through its **kernel supply** (:mod:`._template` states the contract) on its packed constants
-``kc``. n is ``U.shape[1]``, p is ``cp[0]``.
-
-This module is never run as it stands: the import lines marked ``# kernel supply`` name the stubs of
-:mod:`._template`, and :func:`rc3r.simulate._fast.instantiate` writes a copy of this source per supply
-with those lines naming the supply's module (numba caches a module on disk, but not a function that
-receives another jitted function, nor a closure over one). So every import here is absolute. Status
-codes: :mod:`rc3r.simulate.status`.
+Effects (``fx`` of :meth:`rc3r.plants.Plant.pack`, the loop's noise, quantization, delay) are applied by
+:mod:`rc3r.plants._kernels`; the law by :mod:`rc3r.controllers._kernels` (its integer code). The robot
+enters only through its **kernel supply** (:mod:`._template`) on its constants ``kc``. n is
+``U.shape[1]``, p is ``cp[0]``. Never run as it stands: :func:`rc3r.simulate._fast.instantiate` writes a
+copy per supply with the lines marked ``# kernel supply`` naming the supply's module (numba caches a
+module on disk, not a function that receives another jitted function), so every import here is
+absolute. Status codes: :mod:`rc3r.simulate.status`.
 """
 from __future__ import annotations
 
@@ -86,7 +78,7 @@ def closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v,
     return _fd(kc, x[0:n], x[n:2 * n], w, xdot[n:2 * n], wk)
 
 
-@njit(**_JIT)
+@njit(**dict(_JIT, inline="always"))
 def _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys, fresh=True):
     """:func:`closed_loop_rhs` (``fresh`` as there), or if ``plant_only`` the plant alone (:func:`_plant_rhs`,
     x = (q, qd)) under the held torque ``u`` (read, not written; ``w`` is scratch). False if M is not PD."""
@@ -96,11 +88,15 @@ def _f(plant_only, t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, 
 
 
 @njit(**_JIT)
-def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, tw, plant_only=False):
+def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, tw, plant_only=False,
+              warm=False):
     """J = df/dx and Ft = df/dt at (t, x) (F0 = f(t, x); ``plant_only``: f of :func:`_f`, autonomous, so
     Ft = 0): by :func:`_tangent_jacobian` if it can (``tw``: :func:`._jacobian.work`), else by forward
-    differences. Returns the evaluations of f made (0 for the analytic one)."""
-    if not plant_only and _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, xi, v, a, r, w, tw):
+    differences. Returns the evaluations of f made (0 for the analytic one). ``warm``: the last evaluation of
+    f was :func:`closed_loop_rhs` at this (t, x), so ``Y``, ``xi``, ``v``, ``a``, ``r`` and the delivered ``u`` hold
+    its values (the law is not evaluated again)."""
+    if not plant_only and _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, xi, v, a, r, w, tw,
+                                            warm):
         return 0
     n = x.shape[0]
     sqeps = math.sqrt(2.220446049250313e-16)
@@ -123,7 +119,7 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
 
 
 @njit(**_JIT)
-def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v, a, r, w, tw):
+def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v, a, r, w, tw, warm=False):
     """J and Ft at (t, x) by the chain rule (:mod:`._jacobian`) on the supply's ``tangents_into`` and
     ``plant_tangents_into`` (such a supply forms ``Y`` in ``passes_into``); False (nothing usable written) if
     it has none or the law schedules K by M(q). ``u``, ``ref``, ``Y``, ``th``, ``v``, ``a``, ``r``, ``w``:
@@ -136,7 +132,8 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     q, qd = x[0:n], x[n:2 * n]
     reference_into(tp, t, ref)
     reference_jerk_into(tp, t, jerk)
-    control(law, cp, q, qd, x[2 * n:], ref, kc, wk, u, Ft[2 * n:], Y, th, v, a, r, w)
+    if not warm:  # else the law's values at (t, x) are still in the scratch, u the delivered one (:func:`._jacobian.finish`)
+        control(law, cp, q, qd, x[2 * n:], ref, kc, wk, u, Ft[2 * n:], Y, th, v, a, r, w)
     if not (_tangents(kc, th, q, qd, v, a, D, wk) and _ptangents(kc, q, qd, F0[n:2 * n], Dp, wk)):
         return False
     law_slopes(law, cp, n, ref, jerk, G, Wx)
@@ -317,7 +314,8 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             h = t_final - t
             last = True
         if jac_age >= jac_reuse:
-            nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, tw)
+            nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, tw,
+                              False, True)  # warm: the last f was at (t, x) (first, or the step's end)
             jac_age = 0
         while True:
             if nsteps + nrej >= max_steps:
