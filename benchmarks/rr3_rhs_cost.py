@@ -3,7 +3,9 @@
 The compiled engine's right-hand side of the paper's robust-perturbed loop, and its parts, each
 called 10^6 times from a compiled loop (no Python in between; best of 3): the whole
 ``closed_loop_rhs``, the law (``control``: regressor, Y^T r, the eq. 6 term, Y theta), the plant's
-forward dynamics, the reference trajectory. Then the 10 s run with each Rosenbrock method and
+forward dynamics, the reference trajectory; one closed-loop Jacobian, analytic (the 3R's generated
+tangents, ``_tangent_jacobian``) and by forward differences (the fallback of ``_jacobian``, 7
+right-hand sides). Then the 10 s run with each Rosenbrock method and
 Jacobian policy (RODAS, the robust laws' default, always with a Jacobian per step): steps, rejected
 steps, right-hand sides, wall time (``SimResult``). The numbers of docs/performance.md ("Not met")
 come from this script.
@@ -39,7 +41,7 @@ def main() -> None:
         xi = np.empty(p_); v = np.empty(n); a = np.empty(n); r = np.empty(n); w = np.empty(n); ys = np.empty(1)
         s = 0.0
         for k in range(N):
-            rhs(k * 1e-6, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys)
+            rhs(k * 1e-6, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys, True)
             s += xdot[3]
         return s
 
@@ -72,8 +74,50 @@ def main() -> None:
             s += ref[0, 1]
         return s
 
+    from rc3r.simulate.engines._jacobian import work
+
+    tj = mod._tangent_jacobian
+
+    @njit
+    def loop_jacobian(N, x, kc, fx, law, cp, tp, n, analytic):
+        p_ = int(cp[0]); wk = mk(kc); m = x.shape[0]
+        u = np.empty(n); ref = np.empty((6, n)); Y = np.empty((n, p_)); xi = np.empty(p_); v = np.empty(n)
+        a = np.empty(n); r = np.empty(n); w = np.empty(n); ys = np.empty(1)
+        F0 = np.empty(m); Fp = np.empty(m); J = np.empty((m, m)); Ft = np.empty(m); tw = work(n, p_, m - 2 * n)
+        s = 0.0
+        for k in range(N):
+            t = 0.3 + k * 1e-9
+            rhs(t, x, kc, wk, fx, False, law, cp, tp, F0, u, ref, Y, xi, v, a, r, w, ys, True)
+            if analytic:
+                tj(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, xi, v, a, r, w, tw, True)
+            else:  # the forward differences of _jacobian (plant_only=False, no tangents tried)
+                sq = 1.4901161193847656e-08
+                for j in range(m):
+                    dx = sq * max(abs(x[j]), 1e-3)
+                    xj = x[j]
+                    x[j] = xj + dx
+                    rhs(t, x, kc, wk, fx, False, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys, j == 0)
+                    x[j] = xj
+                    for i in range(m):
+                        J[i, j] = (Fp[i] - F0[i]) / dx
+                rhs(t + sq, x, kc, wk, fx, False, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys, True)
+                for i in range(m):
+                    Ft[i] = (Fp[i] - F0[i]) / sq
+            s += J[4, 1]
+        return s
+
     N = 1_000_000
     args = (x0, kc, fx, code, cp, tp, 3)
+    x1 = x0 + 0.1
+    print("closed-loop Jacobian at one state, per call (compiled loop of 2e5, each after one right-hand side "
+          "at that state, which is subtracted; best of 3):")
+    costs = {}
+    for name, an in (("analytic (tangents)", True), ("forward differences", False)):
+        loop_jacobian(10, x1, kc, fx, code, cp, tp, 3, an)
+        costs[name] = min(_timed(loop_jacobian, 200_000, (x1, kc, fx, code, cp, tp, 3, an)) for _ in range(3))
+    base = min(_timed(loop_rhs, 200_000, (x1,) + args[1:]) for _ in range(3))
+    for name, c in costs.items():
+        print(f"  {name:24s} {(c - base) / 200_000 * 1e9:7.1f} ns")
     print("right-hand side of the 3R's robust-perturbed loop, per call (compiled loop of 1e6, best of 3):")
     for name, f in (("closed_loop_rhs", loop_rhs), ("law (control)", loop_law),
                     ("plant forward dynamics", loop_plant), ("reference trajectory", loop_reference)):

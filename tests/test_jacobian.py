@@ -42,7 +42,7 @@ def _f(mod, t, x, kc, fx, code, cp, tp, n):
     F = np.empty(x.size)
     u, ref, Y, xi, v, a, r, w, ys = _scratch(n, p)
     fric = bool(np.any(fx[:3 * n] != 0.0))
-    ok = mod.closed_loop_rhs(t, x, kc, mod._make_work(kc), fx, fric, code, cp, tp, F, u, ref, Y, xi, v, a, r, w, ys)
+    ok = mod.closed_loop_rhs(t, x, kc, mod._make_work(kc), fx, fric, code, cp, tp, F, u, ref, Y, xi, v, a, r, w, ys, True)
     assert ok
     return F, u, ys[0], Y.T @ r
 
@@ -148,7 +148,7 @@ def test_warm_jacobian_equals_cold(case, rng):
     wk = mod._make_work(kc)
     S = _scratch(n, p)
     F0 = np.empty(N)
-    assert mod.closed_loop_rhs(t, x, kc, wk, fx, False, code, cp, tp, F0, *S)
+    assert mod.closed_loop_rhs(t, x, kc, wk, fx, False, code, cp, tp, F0, *S, True)
     Jw, Ftw = np.full((N, N), np.nan), np.full(N, np.nan)
     assert mod._tangent_jacobian(t, x, kc, wk, fx, code, cp, tp, Jw, Ftw, F0, *S[:8], work(n, p, N - 2 * n), True)
     assert ok and np.array_equal(J, Jw) and np.array_equal(Ft, Ftw)

@@ -33,7 +33,7 @@ from rc3r.controllers._kernels import ROBUST, uses_xi
 from rc3r.simulate.engines._linalg import _lu_factor
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
-_INLINE = dict(_JIT, inline="always")
+_INLINE = dict(_JIT, inline="always")  # the helpers of compose: one copy, in it
 
 
 @njit(**_JIT)

@@ -38,6 +38,7 @@ from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
 from rc3r.trajectory import reference_into, reference_jerk_into
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
+_ON = np.ones(1, dtype=np.bool_)  # flags pass as _ON[0], a bool (a literal True would compile a second copy)
 
 
 @njit(**dict(_JIT, inline="always"))
@@ -112,7 +113,7 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
         Ft[:] = 0.0
         return n
     dt = sqeps * max(abs(t), 1.0)
-    closed_loop_rhs(t + dt, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys)
+    closed_loop_rhs(t + dt, x, kc, wk, fx, fric, law, cp, tp, Fp, u, ref, Y, xi, v, a, r, w, ys, _ON[0])
     for i in range(n):
         Ft[i] = (Fp[i] - F0[i]) / dt
     return n + 1
@@ -122,9 +123,8 @@ def _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi,
 def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v, a, r, w, tw, warm=False):
     """J and Ft at (t, x) by the chain rule (:mod:`._jacobian`) on the supply's ``tangents_into`` and
     ``plant_tangents_into`` (such a supply forms ``Y`` in ``passes_into``); False (nothing usable written) if
-    it has none or the law schedules K by M(q). ``u``, ``ref``, ``Y``, ``th``, ``v``, ``a``, ``r``, ``w``:
-    scratch, as in :func:`control`. d(Y^T r) enters only contracted, ``tb^T d(Y^T r) = r^T d(Y tb)``, so
-    each row it needs is one more ``tangents_into`` at ``tb``: n + 1 for the robust laws, p for the adaptive."""
+    it has none or the law schedules K by M(q). ``u`` .. ``w``: scratch, as in :func:`control`. d(Y^T r) enters
+    only as ``b^T d(Y^T r) = r^T d(Y b)``: one more ``tangents_into`` per b (n + 1 robust, p adaptive)."""
     n = u.shape[0]
     D, Dp, G, Wx, jerk = tw[0], tw[1], tw[3], tw[4], tw[7]
     if inertia_gain(law, cp, n) > 0.0:
@@ -132,8 +132,8 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     q, qd = x[0:n], x[n:2 * n]
     reference_into(tp, t, ref)
     reference_jerk_into(tp, t, jerk)
-    if not warm:  # else the law's values at (t, x) are still in the scratch, u the delivered one (:func:`._jacobian.finish`)
-        control(law, cp, q, qd, x[2 * n:], ref, kc, wk, u, Ft[2 * n:], Y, th, v, a, r, w)
+    if not warm:  # f at (t, x) leaves the law's values in the scratch (u: the delivered torque, as when warm)
+        closed_loop_rhs(t, x, kc, wk, fx, _friction(fx, n), law, cp, tp, Ft, u, ref, Y, th, v, a, r, w, tw[14], _ON[0])
     if not (_tangents(kc, th, q, qd, v, a, D, wk) and _ptangents(kc, q, qd, F0[n:2 * n], Dp, wk)):
         return False
     law_slopes(law, cp, n, ref, jerk, G, Wx)
@@ -226,14 +226,14 @@ def _ode23s_stages(t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1
     _lu_solve(W, piv, k1)
     for i in range(n):
         tmp[i] = x[i] + 0.5 * h * k1[i]
-    ok1 = closed_loop_rhs(t + 0.5 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys)
+    ok1 = closed_loop_rhs(t + 0.5 * h, tmp, kc, wk, fx, fric, law, cp, tp, F1, u, ref, Y, xi, v, a, r, w, ys, _ON[0])
     for i in range(n):
         k2[i] = F1[i] - k1[i]
     _lu_solve(W, piv, k2)
     for i in range(n):
         k2[i] += k1[i]
         xnew[i] = x[i] + h * k2[i]
-    ok2 = closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys)
+    ok2 = closed_loop_rhs(t + h, xnew, kc, wk, fx, fric, law, cp, tp, F2, u, ref, Y, xi, v, a, r, w, ys, _ON[0])
     for i in range(n):
         k3[i] = F2[i] - e32 * (k2[i] - F1[i]) - 2.0 * (k1[i] - F0[i]) + hd * Ft[i]
     _lu_solve(W, piv, k3)
@@ -288,7 +288,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
     ys = np.empty(1); u0 = np.empty(nj)
     nrhs = 0; nsteps = 0; nrej = 0
     t = t_out[0]
-    ok = closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, F0, u, ref, Y, xi, v, a, r, w, ys)
+    ok = closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, F0, u, ref, Y, xi, v, a, r, w, ys, _ON[0])
     nrhs += 1
     X[0] = x; U[0] = u; R[0] = ref[0]
     ynorm[0] = ys[0]
@@ -315,7 +315,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             last = True
         if jac_age >= jac_reuse:
             nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w, ys, tw,
-                              False, True)  # warm: the last f was at (t, x) (first, or the step's end)
+                              not _ON[0], _ON[0])  # warm: the last f was at (t, x) (first, or the step's end)
             jac_age = 0
         while True:
             if nsteps + nrej >= max_steps:
@@ -337,7 +337,7 @@ def integrate_continuous(x0, t_out, kc, fx, law, cp, tp, rtol, atol, h0, hmax, l
             last = land = False
             if jac_age > 0:  # rejected with an old Jacobian: refresh it first
                 nrhs += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, u, ref, Y, xi, v, a, r, w,
-                                  ys, tw)
+                                  ys, tw, not _ON[0], not _ON[0])
                 jac_age = 0
             h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** (1.0 / q_err)) if err < 1e300 else 0.1 * h
             if h < 1e-14 * max(1.0, abs(t)):
@@ -409,7 +409,7 @@ def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a
         h = min(hs[0], Ts - t)
         cut = h < hs[0]
         nf += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, ua, ref, Y, xi, v, a, r, tau, ys, tw,
-                        True)
+                        _ON[0], not _ON[0])
         while True:
             steps += 1
             if steps > budget:
@@ -535,6 +535,6 @@ def closed_loop_xdot(t, x, kc, fx, law, cp, tp, n):
     xdot = np.empty(x.shape[0])
     u = np.empty(n); ref = np.empty((6, n)); Y = np.empty((n, p)); xi = np.empty(p)
     v = np.empty(n); a = np.empty(n); r = np.empty(n); w = np.empty(n); ys = np.empty(1)
-    if not closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys):
+    if not closed_loop_rhs(t, x, kc, wk, fx, fric, law, cp, tp, xdot, u, ref, Y, xi, v, a, r, w, ys, _ON[0]):
         xdot[:] = np.nan
     return xdot
