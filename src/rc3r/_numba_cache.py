@@ -10,7 +10,7 @@ in this package only. They keep numba's locations (``__pycache__`` beside the so
 ``NUMBA_CACHE_DIR`` or the user-wide cache) and add to each function's source stamp
 :func:`package_hash`: a SHA-256 of every module of the package that uses numba. Any edit
 of any such module then invalidates every cached rc3r kernel, and numba recompiles them
-(about 20 s) once. It relies on numba's ``CacheImpl._locator_classes`` (numba 0.59-0.68);
+(about a minute for the 3R) once. It relies on numba's ``CacheImpl._locator_classes`` (numba 0.59-0.68);
 if that is missing, nothing is installed and numba's own behaviour stays.
 """
 from __future__ import annotations

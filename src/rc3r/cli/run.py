@@ -24,12 +24,14 @@ def _progress(msg: str) -> None:
 
 
 def announce_compile(plant, rate=False) -> None:
-    """Say so before a first run compiles the robot's simulator (numba, once; measured 2026-12-02 on the
-    2-core machine: about 20 s of CPU for the 3R, 87 s for the UR5 chain engine)."""
+    """Say so before a first run compiles the robot's simulator (numba, once; measured on the 2-core machine:
+    the 3R's continuous integrator 34 s and its sampled one 20 s (``rc3r bench``, 2026-12-05), 87 s of CPU for
+    the UR5 chain engine (2026-12-02))."""
     eng = getattr(plant, "fast_engine", None)
     which = None if rate is False else ("continuous" if rate is None else "sampled")  # False: both modes
     if eng is not None and not getattr(eng, "is_cached", lambda which=None: True)(which):
-        what = "about 20 s" if getattr(plant, "n", 0) <= 3 else "1-2 minutes for a 6-joint arm"
+        small = {"continuous": "about 35 s", "sampled": "about 20 s"}.get(which, "about a minute")
+        what = small if getattr(plant, "n", 0) <= 3 else "1-2 minutes for a 6-joint arm"
         _progress(f"rc3r: compiling the simulator's kernels (numba): {what}, once; cached on disk afterwards")
 
 
