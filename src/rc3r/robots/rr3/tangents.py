@@ -11,9 +11,9 @@ Checked against Pinocchio's ``computeRNEADerivatives`` and central differences i
 """
 from __future__ import annotations
 
-import math
-
 from numba import njit
+
+from .kernels import _trig
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -21,9 +21,7 @@ _JIT = dict(cache=True, nogil=True, error_model="numpy")
 @njit(**_JIT)
 def torque_tangent(th, q2, q3, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3, l2, g0, D):
     """D (3, 12) = d(Y theta)/d(q, qd, v, a) at the state; ``th`` (15,)."""
-    s2 = math.sin(q2); c2 = math.cos(q2)
-    s3 = math.sin(q3); c3 = math.cos(q3)
-    s23 = s2 * c3 + c2 * s3; c23 = c2 * c3 - s2 * s3
+    s2, c2, s3, c3, s23, c23 = _trig(q2, q3)
     t0 = qd2*v2
     t1 = s2**2
     t2 = c2**2

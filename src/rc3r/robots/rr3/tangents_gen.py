@@ -11,9 +11,9 @@ derivatives are those of the very function the simulator evaluates. With
   :math:`Y^T r` only contracted with a vector ``b``, which is this one at ``theta = b``:
   :math:`b^T \partial(Y^T r)/\partial z = r^T \partial(Y b)/\partial z`.
 
-SymPy differentiates; ``sympy.cse`` removes common subexpressions; the sines of ``q_2`` and
-``q_3`` are then named ``s2, c2, s3, c3`` and computed once by libm as in :func:`~.kernels._trig`
-(``s23``, ``c23`` by the addition theorem, as there). SymPy is needed only to regenerate
+SymPy differentiates; ``sympy.cse`` removes common subexpressions; the sines of ``q_2``, ``q_3`` and
+``q_2 + q_3`` are then named ``s2, c2, s3, c3, s23, c23`` and computed by the kernels' own
+:func:`~.kernels._trig`. SymPy is needed only to regenerate
 (the ``codegen`` extra); ``tests/test_rr3_tangents.py`` checks that the committed module is what
 this script writes, and the derivatives against Pinocchio's ``computeRNEADerivatives`` and
 central differences.
@@ -39,9 +39,9 @@ Checked against Pinocchio's ``computeRNEADerivatives`` and central differences i
 """
 from __future__ import annotations
 
-import math
-
 from numba import njit
+
+from .kernels import _trig
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 '''
@@ -96,8 +96,7 @@ def _body(rows, out: str) -> list[str]:
 def source() -> str:
     """The text of :mod:`.tangents`."""
     D = _symbolic()
-    trig = ["    s2 = math.sin(q2); c2 = math.cos(q2)", "    s3 = math.sin(q3); c3 = math.cos(q3)",
-            "    s23 = s2 * c3 + c2 * s3; c23 = c2 * c3 - s2 * s3"]
+    trig = ["    s2, c2, s3, c3, s23, c23 = _trig(q2, q3)"]
     args = "q2, q3, qd1, qd2, qd3, v1, v2, v3, a1, a2, a3"
     text = _HEADER + "\n\n@njit(**_JIT)\n"
     text += f"def torque_tangent(th, {args}, l2, g0, D):\n"

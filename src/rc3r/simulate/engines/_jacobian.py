@@ -29,7 +29,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rc3r.controllers._kernels import ROBUST, uses_xi
+from rc3r.controllers._kernels import ROBUST, regressor_transpose, uses_xi
 from rc3r.simulate.engines._linalg import _lu_factor
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
@@ -179,11 +179,7 @@ def xi_rows(law, cp, Y, r, tw):
     n, p = Y.shape
     if not uses_xi(law):
         return 0
-    for k in range(p):
-        acc = 0.0
-        for i in range(n):
-            acc += Y[i, k] * r[i]
-        xs[k] = acc
+    regressor_transpose(Y, r, xs)
     if tw[5].shape[1] > 2 * n + 1:  # controller states: the adaptive law
         for i in range(p):
             for k in range(p):

@@ -132,8 +132,8 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     q, qd = x[0:n], x[n:2 * n]
     reference_into(tp, t, ref)
     reference_jerk_into(tp, t, jerk)
-    if not warm:  # f at (t, x) leaves the law's values in the scratch (u: the delivered torque, as when warm)
-        closed_loop_rhs(t, x, kc, wk, fx, _friction(fx, n), law, cp, tp, Ft, u, ref, Y, th, v, a, r, w, tw[14], _ON[0])
+    if not warm:  # f at (t, x), ref already at t, leaves the law's values in the scratch (u delivered, as warm)
+        closed_loop_rhs(t, x, kc, wk, fx, _friction(fx, n), law, cp, tp, Ft, u, ref, Y, th, v, a, r, w, tw[14], not _ON[0])
     if not (_tangents(kc, th, q, qd, v, a, D, wk) and _ptangents(kc, q, qd, F0[n:2 * n], Dp, wk)):
         return False
     law_slopes(law, cp, n, ref, jerk, G, Wx)
