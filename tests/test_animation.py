@@ -114,6 +114,7 @@ def test_rc3r_run_animate_writes_a_gif_of_25_frames_per_second(tmp_path, capsys)
     assert matplotlib.get_backend() == backend
 
 
+@pytest.mark.slow
 def test_rc3r_run_animate_a_generic_robot(tmp_path):
     """The UR5 (python engine) animates as well: 0.4 s, 10 frames."""
     out = tmp_path / "ur5"

@@ -23,6 +23,7 @@ def _metrics(d):
     return json.loads((d / "metrics.json").read_text())
 
 
+@pytest.mark.slow
 def test_z1_friction_from_its_urdf_grows_the_fbl_error(tmp_path, capsys):
     """The Z1's URDF has <dynamics damping friction>: FBL (which does not model friction) tracks
     to 1e-4 rad on the frictionless plant and is measurably worse with --friction urdf; the

@@ -9,6 +9,7 @@ repeated 100 times. Each log is identified with the defaults (cut-off from the d
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import rc3r
 from rc3r.identify.excitation import random_fourier
@@ -19,6 +20,7 @@ LOGS = 100
 CONFIDENCE = 0.95
 
 
+@pytest.mark.slow
 def test_true_theta_is_inside_the_ellipsoid_at_the_stated_confidence():
     """Coverage over 100 logs within [0.88, 0.99]: a calibrated 95 % region gives 95 +- 2.2 % (binomial
     standard deviation), so 0.88 is 3.2 sigma below and 0.99 is 1.8 sigma above (a region twice too large

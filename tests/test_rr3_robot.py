@@ -27,6 +27,7 @@ def test_forward_dynamics_equals_aba(plant, rng):
         np.testing.assert_allclose(a_cf, a_pin, rtol=1e-10, atol=1e-10 * np.abs(a_pin).max())
 
 
+@pytest.mark.slow
 def test_closed_form_plant_follows_pinocchio_over_a_whole_run(plant, table1):
     """Same controller (FBL with theta_0), same integrator (DOP853, rtol 1e-12), 10 s of the paper's
     trajectory: the closed-form plant and the ABA plant stay within 1e-8 rad."""
