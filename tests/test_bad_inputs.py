@@ -23,6 +23,7 @@ from pathlib import Path
 import pytest
 
 from rc3r.cli import main
+from rc3r.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = (ROOT / "urdf" / "rr3.urdf").read_text()
@@ -381,3 +382,101 @@ def test_urdfdom_lines_never_reach_the_terminal():
     assert p.returncode == 2 and p.stdout == "", p
     assert p.stderr.count("\n") == 1 and p.stderr.startswith("rc3r: error: Pinocchio cannot read URDF"), p.stderr
     assert "parent link [nolink] of joint [joint3] not found" in p.stderr and "model.cpp" not in p.stderr
+
+
+# --- rc3r identify on hostile logs (issue 33, item 8) ---------------------------------------------
+
+def _log_table(n: int = 2000, dt: float = 1e-3):
+    """A plausible 3-joint log (t, q, tau) of ``n`` samples every ``dt`` s: enough to pass load_log."""
+    import numpy as np
+
+    t = np.arange(n) * dt
+    q = np.column_stack([np.sin(2 * np.pi * f * t) for f in (0.5, 0.7, 1.1)])
+    tau = np.column_stack([np.cos(2 * np.pi * f * t) for f in (0.5, 0.7, 1.1)])
+    return t, q, tau
+
+
+def _hostile_log(kind: str, d: Path) -> Path:
+    import numpy as np
+
+    from rc3r.identify.log import Log, save_log
+
+    t, q, tau = _log_table()
+    if kind == "tau-1e300":
+        tau[700, 1] = 1e300
+    elif kind == "t-last-1e300":
+        t[-1] = 1e300
+    elif kind == "t-last-1e9":
+        t[-1] = 1e9
+    elif kind == "gap-1e6":
+        t[1000:] += 1e6
+    elif kind == "gap-1s":
+        t[1000:] += 1.0
+    elif kind == "gaps-everywhere":  # every 10th step 60 median steps (each bridged): a grid of 6.9 x the samples
+        t = np.concatenate([[0.0], np.cumsum(np.where(np.arange(1, t.size) % 10, 1e-3, 60e-3))])
+    if kind == "header-only":
+        path = d / "header.csv"
+        path.write_text("t,q1,q2,q3,tau1,tau2,tau3\n")
+        return path
+    if kind.startswith("npz"):
+        path = d / f"{kind}.npz"
+        save_log(Log(t, q, tau), path)
+        data = path.read_bytes()
+        if kind == "npz-crc":  # a flipped byte inside an array: the zip's CRC-32 check fails
+            k = data.index(b"q.npy") + 400
+            data = data[:k] + bytes([data[k] ^ 0xFF]) + data[k + 1:]
+        else:  # truncated halfway
+            data = data[:len(data) // 2]
+        path.write_bytes(data)
+        return path
+    path = d / f"{kind}.csv"
+    save_log(Log(t, q, tau), path)
+    return path
+
+
+@pytest.mark.parametrize("kind, words", [
+    ("tau-1e300", "tau2 is 1e+300 at sample 701, beyond 1e+12"),     # main: LinAlgError, exit 70
+    ("t-last-1e300", "t is 1e+300 at sample 2000, beyond 1e+12"),    # main: "Maximum allowed size exceeded"
+    ("t-last-1e9", "more than 1e+06 s"),                             # a grid of 1e12 points
+    ("gap-1e6", "more than 1e+06 s"),                                # main: MemoryError, 7.4 GiB
+    ("gap-1s", "a gap of 1.001 s between samples 1000 and 1001"),
+    ("gaps-everywhere", "gaps fill most of it"),
+    ("npz-crc", "not a readable NPZ file: BadZipFile"),               # main: BadZipFile, exit 70
+    ("npz-truncated", "not a readable NPZ file"),
+    ("header-only", "has a header and no rows"),                      # main: numpy's UserWarning too
+])
+def test_identify_refuses_hostile_logs_in_one_line(kind, words, tmp_path, monkeypatch, capfd):
+    """Property: a log whose numbers would overflow (a torque of 1e300), whose time span or gaps would make
+    the resampling grid enormous, a corrupt NPZ, or a CSV with only its header is refused by ``rc3r
+    identify`` with exit 2, exactly one ``rc3r: error:`` line naming the problem, no Python warning, no
+    traceback, and no --out written (limits: rc3r.identify.log's docstring, docs/errors.md)."""
+    monkeypatch.chdir(tmp_path)
+    path = _hostile_log(kind, tmp_path)
+    out = tmp_path / "id"
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(["identify", str(path), "--robot", "rr3", "--out", str(out)])
+    err = capfd.readouterr().err
+    shown = [f"{w.category.__name__}: {w.message}" for w in caught if not issubclass(w.category, _HIDDEN)]
+    assert code == 2, (kind, code, err)
+    assert err.count("\n") == 1 and err.startswith("rc3r: error: ") and words in err, (kind, err)
+    assert not shown and "Traceback" not in err, (kind, shown, err)
+    assert not out.exists()
+
+
+def test_npz_log_too_large_unpacked_is_refused_unread(tmp_path, monkeypatch):
+    """Property: an NPZ whose arrays would unpack to more than MAX_NPZ_BYTES (a zip bomb) is refused from
+    its zip directory, before numpy reads (allocates) any array."""
+    import numpy as np
+
+    import rc3r.identify.log as L
+
+    t, q, tau = _log_table()
+    path = tmp_path / "log.npz"
+    L.save_log(L.Log(t, q, tau), path)
+    assert L.load_log(path).samples == t.size
+    monkeypatch.setattr(L, "MAX_NPZ_BYTES", 1000)
+    monkeypatch.setattr(np, "load", lambda *a, **k: pytest.fail("np.load called on an oversized NPZ"))
+    with pytest.raises(ConfigError, match="GiB unpacked, more than"):
+        L.load_log(path)
