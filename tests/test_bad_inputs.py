@@ -434,7 +434,7 @@ def _hostile_log(kind: str, d: Path) -> Path:
     return path
 
 
-@pytest.mark.parametrize("kind, words", [
+HOSTILE_LOGS = [
     ("tau-1e300", "tau2 is 1e+300 at sample 701, beyond 1e+12"),     # main: LinAlgError, exit 70
     ("t-last-1e300", "t is 1e+300 at sample 2000, beyond 1e+12"),    # main: "Maximum allowed size exceeded"
     ("t-last-1e9", "more than 1e+06 s"),                             # a grid of 1e12 points
@@ -444,7 +444,10 @@ def _hostile_log(kind: str, d: Path) -> Path:
     ("npz-crc", "not a readable NPZ file: BadZipFile"),               # main: BadZipFile, exit 70
     ("npz-truncated", "not a readable NPZ file"),
     ("header-only", "has a header and no rows"),                      # main: numpy's UserWarning too
-])
+]
+
+
+@pytest.mark.parametrize("kind, words", HOSTILE_LOGS, ids=[c[0] for c in HOSTILE_LOGS])
 def test_identify_refuses_hostile_logs_in_one_line(kind, words, tmp_path, monkeypatch, capfd):
     """Property: a log whose numbers would overflow (a torque of 1e300), whose time span or gaps would make
     the resampling grid enormous, a corrupt NPZ, or a CSV with only its header is refused by ``rc3r
@@ -480,3 +483,51 @@ def test_npz_log_too_large_unpacked_is_refused_unread(tmp_path, monkeypatch):
     monkeypatch.setattr(np, "load", lambda *a, **k: pytest.fail("np.load called on an oversized NPZ"))
     with pytest.raises(ConfigError, match="GiB unpacked, more than"):
         L.load_log(path)
+
+
+# --- rc3r excite: length bounds and files it would overwrite (issue 33, item 8) -------------------
+
+EXCITE = ["excite", "--robot", "rr3", "--harmonics", "2"]
+
+
+EXCITE_CASES = [
+    ("duration-huge", ["--duration", "1e9", "--out", "t.csv"], {}, "an exciting trajectory lasts 1 to 3600 s"),
+    ("duration-tiny", ["--duration", "1e-4", "--out", "t.csv"], {}, "an exciting trajectory lasts 1 to 3600 s"),
+    ("rate-huge", ["--duration", "10", "--rate", "1e9", "--out", "t.csv"], {}, "is 1e+10 samples"),
+    ("rate-tiny", ["--duration", "10", "--rate", "1", "--out", "t.csv"], {}, "is 11 samples"),
+    ("out-exists", ["--duration", "1", "--out", "t.csv"], {"t.csv": "mine"}, "--out t.csv exists; give --force"),
+    ("json-exists", ["--duration", "1", "--out", "t.csv"], {"t.json": "mine"}, "t.json exists; give --force"),
+    ("log-exists", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "l.npz"], {"l.npz": "mine"},
+     "--synthetic-log l.npz exists"),
+    ("truth-exists", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "l.csv"], {"l.truth.json": "mine"},
+     "l.truth.json exists; give --force"),
+    ("log-is-out", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "t.csv", "--force"], {},
+     "--synthetic-log t.csv is the same file as --out t.csv"),
+    ("log-is-out-dotted", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "./t.csv"], {}, "the same file"),
+]
+
+
+@pytest.mark.parametrize("case, extra, existing, words", EXCITE_CASES, ids=[c[0] for c in EXCITE_CASES])
+def test_excite_refuses_before_any_work(case, extra, existing, words, tmp_path, monkeypatch, capfd):
+    """Property: ``rc3r excite`` with a duration or sample count out of bounds, an existing trajectory,
+    .json, synthetic log or .truth.json without --force, or --synthetic-log naming --out (even with
+    --force) exits 2 with one ``rc3r: error:`` line (no progress line: nothing ran), and every file in
+    the directory is left byte for byte (on main: MemoryError of 7.3 TiB, a 1-sample trajectory,
+    silent overwrites)."""
+    monkeypatch.chdir(tmp_path)
+    for name, text in existing.items():
+        (tmp_path / name).write_text(text)
+    capfd.readouterr()
+    code = main(EXCITE + extra)
+    err = capfd.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and err.startswith("rc3r: error: ") and words in err, (case, err)
+    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == existing
+
+
+def test_excite_force_replaces_its_own_files(tmp_path, monkeypatch, capfd):
+    """Property: with --force the refused rerun goes through and replaces the trajectory and its .json."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("old")
+    (tmp_path / "t.json").write_text("old")
+    assert main(EXCITE + ["--duration", "1", "--out", "t.csv", "--force"]) == 0
+    assert (tmp_path / "t.csv").read_text().startswith("t,q1,q2,q3,qd1") and (tmp_path / "t.json").read_text() != "old"
