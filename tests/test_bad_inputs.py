@@ -269,6 +269,17 @@ CASES = [
     ("sw-K0", "sweep rate --K 0 --out {out}", "--K"),
     ("sw-K-neg", "sweep rate --K -5 --out {out}", "--K"),
     ("sw-n-neg", "sweep rate --n -1 --out {out}", "--n"),
+    # hostile plant options, a bounds file of another robot, a design rate no run can reach (issue 33, item 8)
+    ("run-friction-huge", "run --friction 1e300:0 --duration 0.1 --out {out}", "friction viscous [1e+300"),
+    ("run-friction-coulomb", "run --friction 0:1e6 --duration 0.1 --out {out}", "beyond 100000 (N m)"),
+    ("run-noise-huge", "run --noise 1e300:0 --rate 1000 --duration 0.1 --out {out}", "noise_q [1e+300"),
+    ("run-noise-qd", "run --noise 0:1e3 --rate 1000 --duration 0.1 --out {out}", "noise_qd [1000"),
+    ("run-bounds-robot", "run --bounds {d}/ur5_named.toml --duration 0.1 --out {out}",
+     "identified on robot 'ur5', the run's robot is 'rr3'"),
+    ("design-bounds-robot", "design --bounds {d}/ur5_named.toml --rate 1000 --out {d}/design-out",
+     "identified on robot 'ur5', the run's robot is 'rr3'"),
+    ("design-rate-huge", "design --rate 1e9 --duration 1 --out {d}/design-out", "controller samples per verification"),
+    ("design-rate-duration", "design --rate 2e5 --duration 10 --out {d}/design-out", "2e+06 controller samples"),
     # the parser
     ("no-command", "", "command"),
     ("unknown-command", "fly", "fly"),
@@ -297,7 +308,21 @@ def bad_files(tmp_path_factory):
     (d / "foreign" / "thesis.tex").write_text("not rc3r's")
     (d / "campaign").mkdir()
     (d / "campaign" / "runs.csv").write_text("job\n")
+    _named_bounds(d / "ur5_named.toml", "ur5")
     return d
+
+
+def _named_bounds(path: Path, name: str) -> Path:
+    """A valid bounds.toml of the 3R (its n, p and coefficient names) whose ``robot`` key says ``name``."""
+    import numpy as np
+
+    import rc3r
+    from rc3r.identify.bounds_file import write_bounds
+
+    arm = rc3r.load_robot("rr3")
+    b = {"theta0": arm.theta, "P": np.eye(arm.p), "rho": 1.0, "rho_i": np.ones(arm.p), "confidence": 0.95,
+         "chi2": 25.0}
+    return write_bounds(path, b, arm, robot_name=name)
 
 
 def _targets(t: Path) -> Path:
@@ -350,6 +375,7 @@ def test_bad_input_is_one_clean_line(case, argv, words, bad_files, tmp_path, mon
     assert (bad_files / "foreign" / "thesis.tex").read_text() == "not rc3r's"
     assert list(work.iterdir()) == []
     _untouched(bad_files, t)
+    assert not (bad_files / "design-out").exists()
 
 
 def test_bounds_never_prints_a_non_finite_number(monkeypatch, capsys):
@@ -531,3 +557,26 @@ def test_excite_force_replaces_its_own_files(tmp_path, monkeypatch, capfd):
     (tmp_path / "t.json").write_text("old")
     assert main(EXCITE + ["--duration", "1", "--out", "t.csv", "--force"]) == 0
     assert (tmp_path / "t.csv").read_text().startswith("t,q1,q2,q3,qd1") and (tmp_path / "t.json").read_text() != "old"
+
+
+@pytest.mark.parametrize("tol", [-1.0, 0.0, float("nan"), float("inf"), "0.01", True])
+def test_build_run_refuses_a_tolerance_that_is_not_positive(tol):
+    """Property: rc3r.build_run(tolerance=...) (and a config's tolerance) must be a finite number > 0 [rad];
+    anything else is a ParameterError naming it (on main build_run(tolerance=-1.0) returned a spec)."""
+    import rc3r
+    from rc3r.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="tolerance"):
+        rc3r.build_run(duration=0.1, tolerance=tol)
+    with pytest.raises(ParameterError, match="tolerance"):
+        rc3r.build_run(duration=0.1, config={"tolerance": tol})
+    assert rc3r.build_run(duration=0.1, tolerance=0.02).tolerance == 0.02
+
+
+def test_bounds_file_of_the_same_robot_is_accepted(tmp_path):
+    """Property: the robot-name check refuses only another robot: the 3R's own file (robot = "rr3") builds."""
+    import rc3r
+
+    path = _named_bounds(tmp_path / "b.toml", "rr3")
+    spec = rc3r.build_run(duration=0.1, bounds=str(path))
+    assert spec.model["bounds_file"] == str(path)
