@@ -580,3 +580,28 @@ def test_bounds_file_of_the_same_robot_is_accepted(tmp_path):
     path = _named_bounds(tmp_path / "b.toml", "rr3")
     spec = rc3r.build_run(duration=0.1, bounds=str(path))
     assert spec.model["bounds_file"] == str(path)
+
+
+# --- a diverged run prints its one error line, no informational engine note (issue 33, item 8) ------
+
+@pytest.mark.parametrize("eps, code", [("0.01", 3), (None, 0)])
+def test_engine_note_is_not_printed_beside_a_divergence(eps, code, tmp_path, monkeypatch, capfd):
+    """Property: when ``auto`` passes the compiled engine over (forced here, whatever numba's cache holds),
+    a run that diverges prints on stderr only its announcement and its one ``rc3r: error:`` line -- not the
+    informational "python engine: the compiled one is passed over ..." line (main printed it first); a run
+    that finishes still says it (after the run)."""
+    import importlib
+
+    sim = importlib.import_module("rc3r.simulate")  # the package (rc3r.simulate is also a function's name)
+    monkeypatch.setattr(sim, "planned_engine", lambda plant, law, options: ("python", "a test forces the note"))
+    argv = ["run", "--controller", "robust", "--perturbed", "--rate", "1000", "--duration", "0.3", "--engine",
+            "python", "--out", str(tmp_path / "run")] + ([] if eps is None else ["--eps", eps])
+    capfd.readouterr()
+    assert main(argv) == code
+    lines = capfd.readouterr().err.splitlines()
+    if code == 3:
+        assert [ln for ln in lines if not ln.startswith("rc3r run: ")] == [ln for ln in lines if
+                                                                          ln.startswith("rc3r: error: diverged")]
+        assert len(lines) == 2, lines
+    else:
+        assert any("python engine: the compiled one is passed over, a test forces the note" in ln for ln in lines)
