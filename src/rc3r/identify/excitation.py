@@ -69,9 +69,24 @@ MAX_TRAJECTORY_SAMPLES = 1_000_000
 def check_length(duration: float, rate: float) -> int:
     """The number of samples of a trajectory of ``duration`` s at ``rate`` Hz, or a one-line ConfigError.
 
-    ``duration`` must lie in [:data:`MIN_DURATION_S`, :data:`MAX_DURATION_S`] and the samples in
-    [:data:`rc3r.identify.log.MIN_SAMPLES`, :data:`MAX_TRAJECTORY_SAMPLES`] (a log of fewer samples is
-    refused by ``rc3r identify``; more would be a file of gigabytes).
+    Parameters
+    ----------
+    duration : float
+        Period and length of the trajectory [s], in [:data:`MIN_DURATION_S`, :data:`MAX_DURATION_S`].
+    rate : float
+        Samples per second of its file [Hz].
+
+    Returns
+    -------
+    int
+        ``duration * rate + 1`` samples, in [:data:`rc3r.identify.log.MIN_SAMPLES`,
+        :data:`MAX_TRAJECTORY_SAMPLES`] (a log of fewer samples is refused by ``rc3r identify``; more
+        would be a file of gigabytes).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``--duration`` (and ``--rate``) when either bound is not met.
     """
     from .log import MIN_SAMPLES
 
