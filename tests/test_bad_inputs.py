@@ -23,6 +23,7 @@ from pathlib import Path
 import pytest
 
 from rc3r.cli import main
+from rc3r.errors import ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = (ROOT / "urdf" / "rr3.urdf").read_text()
@@ -268,6 +269,17 @@ CASES = [
     ("sw-K0", "sweep rate --K 0 --out {out}", "--K"),
     ("sw-K-neg", "sweep rate --K -5 --out {out}", "--K"),
     ("sw-n-neg", "sweep rate --n -1 --out {out}", "--n"),
+    # hostile plant options, a bounds file of another robot, a design rate no run can reach (issue 33, item 8)
+    ("run-friction-huge", "run --friction 1e300:0 --duration 0.1 --out {out}", "friction viscous [1e+300"),
+    ("run-friction-coulomb", "run --friction 0:1e6 --duration 0.1 --out {out}", "beyond 100000 (N m)"),
+    ("run-noise-huge", "run --noise 1e300:0 --rate 1000 --duration 0.1 --out {out}", "noise_q [1e+300"),
+    ("run-noise-qd", "run --noise 0:1e3 --rate 1000 --duration 0.1 --out {out}", "noise_qd [1000"),
+    ("run-bounds-robot", "run --bounds {d}/ur5_named.toml --duration 0.1 --out {out}",
+     "identified on robot 'ur5', the run's robot is 'rr3'"),
+    ("design-bounds-robot", "design --bounds {d}/ur5_named.toml --rate 1000 --out {d}/design-out",
+     "identified on robot 'ur5', the run's robot is 'rr3'"),
+    ("design-rate-huge", "design --rate 1e9 --duration 1 --out {d}/design-out", "controller samples per verification"),
+    ("design-rate-duration", "design --rate 2e5 --duration 10 --out {d}/design-out", "2e+06 controller samples"),
     # the parser
     ("no-command", "", "command"),
     ("unknown-command", "fly", "fly"),
@@ -296,7 +308,21 @@ def bad_files(tmp_path_factory):
     (d / "foreign" / "thesis.tex").write_text("not rc3r's")
     (d / "campaign").mkdir()
     (d / "campaign" / "runs.csv").write_text("job\n")
+    _named_bounds(d / "ur5_named.toml", "ur5")
     return d
+
+
+def _named_bounds(path: Path, name: str) -> Path:
+    """A valid bounds.toml of the 3R (its n, p and coefficient names) whose ``robot`` key says ``name``."""
+    import numpy as np
+
+    import rc3r
+    from rc3r.identify.bounds_file import write_bounds
+
+    arm = rc3r.load_robot("rr3")
+    b = {"theta0": arm.theta, "P": np.eye(arm.p), "rho": 1.0, "rho_i": np.ones(arm.p), "confidence": 0.95,
+         "chi2": 25.0}
+    return write_bounds(path, b, arm, robot_name=name)
 
 
 def _targets(t: Path) -> Path:
@@ -349,6 +375,7 @@ def test_bad_input_is_one_clean_line(case, argv, words, bad_files, tmp_path, mon
     assert (bad_files / "foreign" / "thesis.tex").read_text() == "not rc3r's"
     assert list(work.iterdir()) == []
     _untouched(bad_files, t)
+    assert not (bad_files / "design-out").exists()
 
 
 def test_bounds_never_prints_a_non_finite_number(monkeypatch, capsys):
@@ -381,3 +408,200 @@ def test_urdfdom_lines_never_reach_the_terminal():
     assert p.returncode == 2 and p.stdout == "", p
     assert p.stderr.count("\n") == 1 and p.stderr.startswith("rc3r: error: Pinocchio cannot read URDF"), p.stderr
     assert "parent link [nolink] of joint [joint3] not found" in p.stderr and "model.cpp" not in p.stderr
+
+
+# --- rc3r identify on hostile logs (issue 33, item 8) ---------------------------------------------
+
+def _log_table(n: int = 2000, dt: float = 1e-3):
+    """A plausible 3-joint log (t, q, tau) of ``n`` samples every ``dt`` s: enough to pass load_log."""
+    import numpy as np
+
+    t = np.arange(n) * dt
+    q = np.column_stack([np.sin(2 * np.pi * f * t) for f in (0.5, 0.7, 1.1)])
+    tau = np.column_stack([np.cos(2 * np.pi * f * t) for f in (0.5, 0.7, 1.1)])
+    return t, q, tau
+
+
+def _hostile_log(kind: str, d: Path) -> Path:
+    import numpy as np
+
+    from rc3r.identify.log import Log, save_log
+
+    t, q, tau = _log_table()
+    if kind == "tau-1e300":
+        tau[700, 1] = 1e300
+    elif kind == "t-last-1e300":
+        t[-1] = 1e300
+    elif kind == "t-last-1e9":
+        t[-1] = 1e9
+    elif kind == "gap-1e6":
+        t[1000:] += 1e6
+    elif kind == "gap-1s":
+        t[1000:] += 1.0
+    elif kind == "gaps-everywhere":  # every 10th step 60 median steps (each bridged): a grid of 6.9 x the samples
+        t = np.concatenate([[0.0], np.cumsum(np.where(np.arange(1, t.size) % 10, 1e-3, 60e-3))])
+    if kind == "header-only":
+        path = d / "header.csv"
+        path.write_text("t,q1,q2,q3,tau1,tau2,tau3\n")
+        return path
+    if kind.startswith("npz"):
+        path = d / f"{kind}.npz"
+        save_log(Log(t, q, tau), path)
+        data = path.read_bytes()
+        if kind == "npz-crc":  # a flipped byte inside an array: the zip's CRC-32 check fails
+            k = data.index(b"q.npy") + 400
+            data = data[:k] + bytes([data[k] ^ 0xFF]) + data[k + 1:]
+        else:  # truncated halfway
+            data = data[:len(data) // 2]
+        path.write_bytes(data)
+        return path
+    path = d / f"{kind}.csv"
+    save_log(Log(t, q, tau), path)
+    return path
+
+
+HOSTILE_LOGS = [
+    ("tau-1e300", "tau2 is 1e+300 at sample 701, beyond 1e+12"),     # main: LinAlgError, exit 70
+    ("t-last-1e300", "t is 1e+300 at sample 2000, beyond 1e+12"),    # main: "Maximum allowed size exceeded"
+    ("t-last-1e9", "more than 1e+06 s"),                             # a grid of 1e12 points
+    ("gap-1e6", "more than 1e+06 s"),                                # main: MemoryError, 7.4 GiB
+    ("gap-1s", "a gap of 1.001 s between samples 1000 and 1001"),
+    ("gaps-everywhere", "gaps fill most of it"),
+    ("npz-crc", "not a readable NPZ file: BadZipFile"),               # main: BadZipFile, exit 70
+    ("npz-truncated", "not a readable NPZ file"),
+    ("header-only", "has a header and no rows"),                      # main: numpy's UserWarning too
+]
+
+
+@pytest.mark.parametrize("kind, words", HOSTILE_LOGS, ids=[c[0] for c in HOSTILE_LOGS])
+def test_identify_refuses_hostile_logs_in_one_line(kind, words, tmp_path, monkeypatch, capfd):
+    """Property: a log whose numbers would overflow (a torque of 1e300), whose time span or gaps would make
+    the resampling grid enormous, a corrupt NPZ, or a CSV with only its header is refused by ``rc3r
+    identify`` with exit 2, exactly one ``rc3r: error:`` line naming the problem, no Python warning, no
+    traceback, and no --out written (limits: rc3r.identify.log's docstring, docs/errors.md)."""
+    monkeypatch.chdir(tmp_path)
+    path = _hostile_log(kind, tmp_path)
+    out = tmp_path / "id"
+    capfd.readouterr()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(["identify", str(path), "--robot", "rr3", "--out", str(out)])
+    err = capfd.readouterr().err
+    shown = [f"{w.category.__name__}: {w.message}" for w in caught if not issubclass(w.category, _HIDDEN)]
+    assert code == 2, (kind, code, err)
+    assert err.count("\n") == 1 and err.startswith("rc3r: error: ") and words in err, (kind, err)
+    assert not shown and "Traceback" not in err, (kind, shown, err)
+    assert not out.exists()
+
+
+def test_npz_log_too_large_unpacked_is_refused_unread(tmp_path, monkeypatch):
+    """Property: an NPZ whose arrays would unpack to more than MAX_NPZ_BYTES (a zip bomb) is refused from
+    its zip directory, before numpy reads (allocates) any array."""
+    import numpy as np
+
+    import rc3r.identify.log as L
+
+    t, q, tau = _log_table()
+    path = tmp_path / "log.npz"
+    L.save_log(L.Log(t, q, tau), path)
+    assert L.load_log(path).samples == t.size
+    monkeypatch.setattr(L, "MAX_NPZ_BYTES", 1000)
+    monkeypatch.setattr(np, "load", lambda *a, **k: pytest.fail("np.load called on an oversized NPZ"))
+    with pytest.raises(ConfigError, match="GiB unpacked, more than"):
+        L.load_log(path)
+
+
+# --- rc3r excite: length bounds and files it would overwrite (issue 33, item 8) -------------------
+
+EXCITE = ["excite", "--robot", "rr3", "--harmonics", "2"]
+
+
+EXCITE_CASES = [
+    ("duration-huge", ["--duration", "1e9", "--out", "t.csv"], {}, "an exciting trajectory lasts 1 to 3600 s"),
+    ("duration-tiny", ["--duration", "1e-4", "--out", "t.csv"], {}, "an exciting trajectory lasts 1 to 3600 s"),
+    ("rate-huge", ["--duration", "10", "--rate", "1e9", "--out", "t.csv"], {}, "is 1e+10 samples"),
+    ("rate-tiny", ["--duration", "10", "--rate", "1", "--out", "t.csv"], {}, "is 11 samples"),
+    ("out-exists", ["--duration", "1", "--out", "t.csv"], {"t.csv": "mine"}, "--out t.csv exists; give --force"),
+    ("json-exists", ["--duration", "1", "--out", "t.csv"], {"t.json": "mine"}, "t.json exists; give --force"),
+    ("log-exists", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "l.npz"], {"l.npz": "mine"},
+     "--synthetic-log l.npz exists"),
+    ("truth-exists", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "l.csv"], {"l.truth.json": "mine"},
+     "l.truth.json exists; give --force"),
+    ("log-is-out", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "t.csv", "--force"], {},
+     "--synthetic-log t.csv is the same file as --out t.csv"),
+    ("log-is-out-dotted", ["--duration", "1", "--out", "t.csv", "--synthetic-log", "./t.csv"], {}, "the same file"),
+]
+
+
+@pytest.mark.parametrize("case, extra, existing, words", EXCITE_CASES, ids=[c[0] for c in EXCITE_CASES])
+def test_excite_refuses_before_any_work(case, extra, existing, words, tmp_path, monkeypatch, capfd):
+    """Property: ``rc3r excite`` with a duration or sample count out of bounds, an existing trajectory,
+    .json, synthetic log or .truth.json without --force, or --synthetic-log naming --out (even with
+    --force) exits 2 with one ``rc3r: error:`` line (no progress line: nothing ran), and every file in
+    the directory is left byte for byte (on main: MemoryError of 7.3 TiB, a 1-sample trajectory,
+    silent overwrites)."""
+    monkeypatch.chdir(tmp_path)
+    for name, text in existing.items():
+        (tmp_path / name).write_text(text)
+    capfd.readouterr()
+    code = main(EXCITE + extra)
+    err = capfd.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and err.startswith("rc3r: error: ") and words in err, (case, err)
+    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == existing
+
+
+def test_excite_force_replaces_its_own_files(tmp_path, monkeypatch, capfd):
+    """Property: with --force the refused rerun goes through and replaces the trajectory and its .json."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("old")
+    (tmp_path / "t.json").write_text("old")
+    assert main(EXCITE + ["--duration", "1", "--out", "t.csv", "--force"]) == 0
+    assert (tmp_path / "t.csv").read_text().startswith("t,q1,q2,q3,qd1") and (tmp_path / "t.json").read_text() != "old"
+
+
+@pytest.mark.parametrize("tol", [-1.0, 0.0, float("nan"), float("inf"), "0.01", True])
+def test_build_run_refuses_a_tolerance_that_is_not_positive(tol):
+    """Property: rc3r.build_run(tolerance=...) (and a config's tolerance) must be a finite number > 0 [rad];
+    anything else is a ParameterError naming it (on main build_run(tolerance=-1.0) returned a spec)."""
+    import rc3r
+    from rc3r.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="tolerance"):
+        rc3r.build_run(duration=0.1, tolerance=tol)
+    with pytest.raises(ParameterError, match="tolerance"):
+        rc3r.build_run(duration=0.1, config={"tolerance": tol})
+    assert rc3r.build_run(duration=0.1, tolerance=0.02).tolerance == 0.02
+
+
+def test_bounds_file_of_the_same_robot_is_accepted(tmp_path):
+    """Property: the robot-name check refuses only another robot: the 3R's own file (robot = "rr3") builds."""
+    import rc3r
+
+    path = _named_bounds(tmp_path / "b.toml", "rr3")
+    spec = rc3r.build_run(duration=0.1, bounds=str(path))
+    assert spec.model["bounds_file"] == str(path)
+
+
+# --- a diverged run prints its one error line, no informational engine note (issue 33, item 8) ------
+
+@pytest.mark.parametrize("eps, code", [("0.01", 3), (None, 0)])
+def test_engine_note_is_not_printed_beside_a_divergence(eps, code, tmp_path, monkeypatch, capfd):
+    """Property: when ``auto`` passes the compiled engine over (forced here, whatever numba's cache holds),
+    a run that diverges prints on stderr only its announcement and its one ``rc3r: error:`` line -- not the
+    informational "python engine: the compiled one is passed over ..." line (main printed it first); a run
+    that finishes still says it (after the run)."""
+    import importlib
+
+    sim = importlib.import_module("rc3r.simulate")  # the package (rc3r.simulate is also a function's name)
+    monkeypatch.setattr(sim, "planned_engine", lambda plant, law, options: ("python", "a test forces the note"))
+    argv = ["run", "--controller", "robust", "--perturbed", "--rate", "1000", "--duration", "0.3", "--engine",
+            "python", "--out", str(tmp_path / "run")] + ([] if eps is None else ["--eps", eps])
+    capfd.readouterr()
+    assert main(argv) == code
+    lines = capfd.readouterr().err.splitlines()
+    if code == 3:
+        assert [ln for ln in lines if not ln.startswith("rc3r run: ")] == [ln for ln in lines if
+                                                                          ln.startswith("rc3r: error: diverged")]
+        assert len(lines) == 2, lines
+    else:
+        assert any("python engine: the compiled one is passed over, a test forces the note" in ln for ln in lines)

@@ -328,3 +328,84 @@ def test_a_dask_cluster_without_workers_stops_with_one_line_and_resume_completes
         return ppid == os.getpid() and (b"rc3r" in cmd or b"dask" in cmd or b"distributed" in cmd)
 
     assert _wait_gone(_procs(ours), 15.0) == []
+
+
+# --- kill -9 of a writer of a whole output directory (rc3r design, run, identify) ----------------
+
+#: A writer of an output directory that stops inside it: prints its temporary directory, then sleeps
+#: (rc3r design killed while its verification runs fill .<out>.tmp-XXXXXXXX).
+_WRITER = """
+import sys, time
+from rc3r.cli._output import output_dir
+with output_dir(sys.argv[1], own=("metrics.json",)) as tmp:
+    (tmp / "metrics.json").write_text("partial")
+    print(tmp, flush=True)
+    time.sleep(600)
+"""
+
+
+def _dead_pid() -> int:
+    """The PID of a process that has ended (and been reaped)."""
+    p = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True,
+                       check=True)
+    return int(p.stdout)
+
+
+def test_a_rerun_removes_the_temporary_directory_of_a_writer_killed_with_sigkill(tmp_path):
+    """Property: after ``kill -9`` of a writer (a real subprocess inside rc3r.cli._output.output_dir) its
+    lock and its ``.out.tmp-XXXXXXXX`` stay behind, and the earlier result is untouched; the next writer
+    takes the stale lock over and removes that temporary directory (on main it stayed for good), while a
+    live writer's is never touched (the second writer is refused first), nor the temporary directory of
+    another output whose name starts the same (``out.tmp-x``), nor a symbolic link of that form."""
+    from rc3r.cli._output import output_dir
+    from rc3r.errors import ConfigError
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "metrics.json").write_text("earlier")
+    other = tmp_path / ".out.tmp-x.tmp-abcdefgh"  # the live temporary directory of the output "out.tmp-x"
+    other.mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / ".out.tmp-zzzzzzzz").symlink_to(tmp_path / "elsewhere")
+    proc = subprocess.Popen([sys.executable, "-c", _WRITER, str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        left = Path(proc.stdout.readline().strip())
+        assert left.parent == tmp_path and left.name.startswith(".out.tmp-"), proc.stderr.read()
+        with pytest.raises(ConfigError, match=f"pid {proc.pid}"):  # a live writer: refused, nothing removed
+            with output_dir(out):
+                pass
+        assert (left / "metrics.json").read_text() == "partial"
+        proc.kill()
+        proc.wait(timeout=10)
+    finally:
+        _killpg(proc.pid)
+        proc.stdout.close()
+        proc.stderr.close()
+    assert left.is_dir() and (tmp_path / ".out.lock").exists()  # the fault: both left behind
+    assert (out / "metrics.json").read_text() == "earlier"
+    with output_dir(out, own=("metrics.json",)) as tmp:
+        assert not left.exists()  # removed as soon as the lock is ours, before the new results are written
+        (tmp / "metrics.json").write_text("new")
+    assert (out / "metrics.json").read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["out", ".out.tmp-x.tmp-abcdefgh", ".out.tmp-zzzzzzzz", "elsewhere"])
+    assert (tmp_path / ".out.tmp-zzzzzzzz").is_symlink() and other.is_dir()
+
+
+def test_rc3r_run_removes_a_planted_stale_temporary_directory(tmp_path, capfd):
+    """Property: the command line does it too: a stale lock with a dead PID and a killed run's
+    ``.run.tmp-XXXXXXXX`` (with a partial timeseries.csv) beside --out; ``rc3r run --force`` takes the
+    lock over, writes its result and leaves no temporary directory (rc3r design and identify write through
+    the same rc3r.cli._output.output_dir)."""
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "metrics.json").write_text('{"earlier": true}')
+    (tmp_path / ".run.lock").write_text(str(_dead_pid()))
+    stale = tmp_path / ".run.tmp-k1ll3d_9"
+    stale.mkdir()
+    (stale / "timeseries.csv").write_text("t,q1\n0,")
+    assert main(["run", "--controller", "fbl", "--rate", "1000", "--duration", "0.05", "--engine", "python",
+                 "--force", "--out", str(out)]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+    assert (out / "timeseries.csv").read_text().startswith("t,")

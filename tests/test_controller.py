@@ -69,3 +69,32 @@ def test_bad_calls():
         ctrl.step(0.003, q[:2], qd)
     with pytest.raises(ParameterError, match="needs a sampled controller"):
         rc3r.Controller(spec.law, spec.plant, spec.trajectory, rate=None, delay=1)
+
+
+@pytest.mark.parametrize("where, bad, words", [
+    ("q", np.nan, "q is NaN or infinite"),
+    ("qd", np.inf, "qd is NaN or infinite"),
+    ("q", -np.inf, "q is NaN or infinite"),
+    ("t", np.nan, "t is NaN or infinite"),
+    ("t", np.inf, "t is NaN or infinite"),
+    ("t", "soon", "t is not a number"),
+    ("q", "abc", "q is not a number"),
+    ("qd", [1.0, "b", 3.0], "qd is not a number"),
+])
+@pytest.mark.parametrize("rate", [1000.0, None])
+def test_non_finite_or_non_numeric_arguments_raise_parameter_error(where, bad, words, rate):
+    """Property: Controller.step with a NaN or infinite entry of q or qd, a NaN or infinite t, or an
+    argument that is not numbers raises ParameterError naming that argument -- never returns a NaN torque
+    (main: silently NaN) and never leaks numpy's or Python's ValueError/OverflowError -- sampled or
+    continuous; and the controller still works afterwards with good arguments."""
+    spec = rc3r.build_run(controller="fbl", rate=1000.0, duration=0.01)
+    ctrl = rc3r.Controller(spec.law, spec.plant, spec.trajectory, rate=rate)
+    q, qd, _ = spec.trajectory.evaluate(0.0)
+    args = {"t": 0.001, "q": q.copy(), "qd": qd.copy()}
+    if where == "t" or isinstance(bad, (str, list)):
+        args[where] = bad
+    else:
+        args[where][1] = bad
+    with pytest.raises(ParameterError, match=words):
+        ctrl.step(args["t"], args["q"], args["qd"])
+    assert np.all(np.isfinite(ctrl.step(0.001, q, qd)))

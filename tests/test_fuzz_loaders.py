@@ -168,3 +168,43 @@ def test_degenerate_urdfs(tmp_path, text):
         robot_class().from_urdf(path)
     with pytest.raises(Rc3rError):
         load_urdf_robot(path)
+
+
+def _npz_log() -> bytes:
+    """A valid NPZ log (t, q, tau of the 3R: 200 samples at 1 kHz) as bytes."""
+    import io
+
+    import numpy as np
+
+    t = np.arange(200) * 1e-3
+    q = np.column_stack([np.sin(2 * np.pi * f * t) for f in (1.0, 2.0, 3.0)])
+    buf = io.BytesIO()
+    np.savez(buf, t=t, q=q, tau=np.cos(q))
+    return buf.getvalue()
+
+
+NPZ_LOG = _npz_log()
+
+
+@FUZZ
+@given(edits=st.lists(st.tuples(st.integers(0, len(NPZ_LOG) - 1), st.integers(1, 255)), min_size=1, max_size=4),
+       cut=st.one_of(st.none(), st.integers(0, len(NPZ_LOG))))
+def test_corrupted_npz_log_is_loaded_or_refused_cleanly(tmp_path_factory, edits, cut):
+    """Property: an NPZ log with 1-4 bytes flipped (in the zip headers, the .npy headers, the data or the
+    CRCs) and possibly truncated is read or refused with one Rc3rError -- never zipfile's BadZipFile, a
+    zlib error or numpy's ValueError (exit 70 on main: "BadZipFile: Bad CRC-32 for file 'q.npy'")."""
+    from rc3r.identify.log import load_log
+
+    data = bytearray(NPZ_LOG)
+    for at, flip in edits:
+        data[at] ^= flip
+    path = tmp_path_factory.mktemp("npz") / "log.npz"
+    path.write_bytes(bytes(data[:cut]) if cut is not None else bytes(data))
+    _clean(lambda: load_log(path, n=3))
+
+
+def test_the_unmutated_npz_log_loads(tmp_path):
+    from rc3r.identify.log import load_log
+
+    (tmp_path / "log.npz").write_bytes(NPZ_LOG)
+    assert load_log(tmp_path / "log.npz", n=3).samples == 200

@@ -370,6 +370,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     """
     cfg = config or {}
     _check_config(cfg, controller)
+    tolerance = _tolerance(tolerance if tolerance is not None else cfg.get("tolerance"))
     seed = int(cfg.get("seed", 0))
     lock = lock if lock is not None else ({k: float(v) for k, v in cfg["lock"].items()} if cfg.get("lock") else None)
     nominal = _nominal(robot or cfg.get("robot"), urdf if urdf is not None else cfg.get("urdf"), lock)
@@ -402,6 +403,8 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         from .identify.bounds_file import load_bounds
 
         bounds_file = load_bounds(bounds_path, robot=nominal)  # read once: for the plant and for the model
+        _check_bounds_robot(bounds_file, robot or cfg.get("robot"),
+                            urdf if urdf is not None else cfg.get("urdf"))
     the_plant = (_bounds_plant(nominal, bounds_file, spec) if bounds_path is not None and _drawn(spec)
                  else _plant(nominal, box_bounds, spec, seed))
     if bounds_path is not None:
@@ -450,7 +453,31 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
             model = {**model, "gains_source": note}
     law = _law(kind, model, ctrl_cfg, eps, table or {})
     return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings),
-                   true_plant, loop, nominal, tolerance if tolerance is not None else cfg.get("tolerance"))
+                   true_plant, loop, nominal, tolerance)
+
+
+def _tolerance(tol) -> float | None:
+    """The verdict's tracking tolerance [rad]: None, or a finite number > 0 (ParameterError otherwise)."""
+    if tol is None:
+        return None
+    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"tolerance must be a number of rad, got {tol!r}")
+    if not (np.isfinite(tol) and tol > 0):
+        raise ParameterError(f"tolerance must be finite and > 0 rad, got {tol!r}")
+    return float(tol)
+
+
+def _check_bounds_robot(bf: dict, robot: str | None, urdf) -> None:
+    """A ``bounds.toml`` names the robot it was identified on (``robot = NAME``): a run of another registered
+    robot is refused, naming both (their sizes and coefficient names may agree, the coefficients do not).
+    A file of a URDF arm, or a run from a URDF, is checked by sizes and names only (load_bounds)."""
+    named = bf.get("robot")
+    if named is None or (urdf is not None and robot is None):
+        return
+    ours = robot or DEFAULT_ROBOT
+    if named != ours:
+        raise ConfigError(f"bounds file {bf['source']} was identified on robot '{named}', the run's robot is "
+                          f"'{ours}': identify '{ours}' (rc3r identify --robot {ours}) or run --robot {named}")
 
 
 def _nominal(robot: str | None, urdf=None, lock: dict | None = None):

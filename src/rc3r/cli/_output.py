@@ -19,12 +19,20 @@ The lock file appears atomically with its owner's PID in it (written into a temp
 then ``link``-ed into place), so it is never empty; a stale lock (its process gone) is broken by
 renaming exactly that file aside, so two processes breaking it at once cannot remove each
 other's fresh lock.
+
+A writer killed by ``kill -9`` (or the OOM killer) leaves its lock and its temporary directory
+``.<name>.tmp-XXXXXXXX`` beside ``path``. The next writer takes the stale lock over and, holding it,
+removes every such temporary directory of ``path`` (:func:`_remove_dead_tmp`): only a writer that
+holds the lock ever creates one, so while the lock is ours none of them has a live owner. Only
+names of exactly that form are touched (``tempfile.mkdtemp``'s 8 characters; a directory
+``.<name>.tmp-x.tmp-XXXXXXXX`` of another output ``<name>.tmp-x`` is not), and only directories.
 """
 from __future__ import annotations
 
 import errno
 import fnmatch
 import os
+import re
 import secrets
 import shutil
 import stat
@@ -281,6 +289,29 @@ def _swap(tmp: Path, final: Path, own) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
+#: What ``tempfile.mkdtemp`` appends to a prefix: 8 characters of this alphabet.
+_MKDTEMP_SUFFIX = "[a-z0-9_]{8}"
+
+
+def _remove_dead_tmp(final: Path) -> list[Path]:
+    """Remove the temporary directories ``.<name>.tmp-XXXXXXXX`` of ``final`` that killed writers left.
+
+    Call only while holding ``final``'s lock (:func:`locked`): a temporary directory is made only under
+    the lock, so every one found then belongs to a writer that is gone. Returns the removed paths.
+    """
+    pattern = re.compile(re.escape(f".{final.name}.tmp-") + _MKDTEMP_SUFFIX + r"\Z")
+    removed = []
+    try:
+        entries = list(os.scandir(final.parent))
+    except OSError:
+        return removed
+    for entry in entries:
+        if pattern.match(entry.name) and entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed.append(Path(entry.path))
+    return removed
+
+
 @contextmanager
 def output_dir(path, own=OWN_ENTRIES):
     """Yield a temporary directory that replaces ``path`` as a whole on success (module docstring).
@@ -292,6 +323,7 @@ def output_dir(path, own=OWN_ENTRIES):
     """
     final = check_output_path(path)
     with locked(final):
+        _remove_dead_tmp(final)  # a killed writer's leftovers: the lock is ours, so their owners are gone
         tmp = None
         try:
             tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.tmp-", dir=final.parent))

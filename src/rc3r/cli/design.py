@@ -20,6 +20,11 @@ from ..provenance import provenance
 from . import EXIT
 from ._output import check_output_path, output_dir
 
+#: Most controller samples (duration x rate) of one verification run: a design runs every plant at several
+#: eps and two rates, so a rate a single run may still take (``rc3r.simulate.MAX_SAMPLES``, 1e9) would keep
+#: it busy for days; 1e6 is 10 s at 100 kHz (``rc3r design --rate 1e9`` did not return).
+DESIGN_MAX_SAMPLES = 1_000_000
+
 #: What ``rc3r design`` writes in its directory (replaced by a rerun; other entries are kept).
 DESIGN_ENTRIES = ("design.toml", "design.md", "design.json", "design.png", "runs.csv")
 
@@ -108,6 +113,12 @@ def cmd_design(args) -> int:
     if opts.get("plant_engine"):
         cfg.setdefault("plant", {})["engine"] = opts["plant_engine"]
     first = build_run(controller="robust", config=cfg, rate=args.rate, eps=1.0)  # bad input refused here
+    samples = first.options.duration * float(args.rate)
+    if samples > DESIGN_MAX_SAMPLES:
+        raise ConfigError(f"--rate {args.rate:g} Hz over {first.options.duration:g} s is {samples:.3g} controller "
+                          f"samples per verification run; rc3r design allows {DESIGN_MAX_SAMPLES:.0e} (lower "
+                          f"--rate or --duration: at most {DESIGN_MAX_SAMPLES / first.options.duration:.3g} Hz "
+                          f"over {first.options.duration:g} s)")
     out = check_output_path(args.out)
     if out.is_dir() and any(out.iterdir()) and not args.force:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")

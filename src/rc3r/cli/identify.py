@@ -83,6 +83,8 @@ def add_parsers(sub, positive, lock) -> None:
                         "jittered stamps; docs/identification.md) and write the log an experiment would record")
     e.add_argument("--out", required=True, metavar="TRAJ.CSV",
                    help="the trajectory (t, q, qd, qdd); its coefficients go to the .json beside it")
+    e.add_argument("--force", action="store_true",
+                   help="replace an earlier trajectory, its .json, or the synthetic log and its .truth.json")
 
 
 def _robot(args):
@@ -160,13 +162,36 @@ def cmd_identify(args) -> int:
     return EXIT["ok"]
 
 
+def _excite_targets(out: Path, log_path: Path | None, force: bool) -> None:
+    """Refuse, before any work, to overwrite: an existing trajectory, its .json, synthetic log or its
+    .truth.json without ``force``; and, even with it, two outputs on one file (``--synthetic-log`` equal to
+    ``--out`` would replace the trajectory just written)."""
+    import os
+
+    targets = {"--out": out, "its coefficients (.json beside --out)": out.with_suffix(".json")}
+    if log_path is not None:
+        targets |= {"--synthetic-log": log_path,
+                    "the synthetic log's truth (.truth.json beside it)": log_path.with_suffix(".truth.json")}
+    seen: dict = {}
+    for what, path in targets.items():
+        key = os.path.realpath(path)
+        if key in seen:
+            raise ConfigError(f"{what} {path} is the same file as {seen[key][0]} {seen[key][1]}: give another name")
+        seen[key] = (what, path)
+    for what, path in targets.items():
+        if path.is_dir():
+            raise ConfigError(f"{what} {path} is a directory")
+        if (path.exists() or path.is_symlink()) and not force:
+            raise ConfigError(f"{what} {path} exists; give --force to replace it, or another name")
+
+
 def cmd_excite(args) -> int:
     """``rc3r excite``: writes the trajectory CSV and its coefficients (.json beside it); optionally a log."""
     import json
 
     import numpy as np
 
-    from ..identify.excitation import excite, limits_of
+    from ..identify.excitation import check_length, excite, limits_of
     from ..identify.log import save_log
     from ..io import atomic_write_text
     from ..provenance import provenance
@@ -179,6 +204,8 @@ def cmd_excite(args) -> int:
     log_path = None if args.synthetic_log is None else Path(args.synthetic_log)
     if log_path is not None and log_path.suffix.lower() not in (".csv", ".npz"):
         raise ConfigError(f"--synthetic-log {log_path} must name a .csv or .npz file")
+    _excite_targets(out, log_path, args.force)
+    check_length(args.duration, args.rate)
     robot = _robot(args)
     lim = limits_of(robot, args.max_velocity, args.max_acceleration)
     _note(f"rc3r excite: {args.harmonics} harmonics per joint over {args.duration:g} s for "
@@ -198,9 +225,11 @@ def cmd_excite(args) -> int:
                                                       "terms": terms}},
                             "provenance": provenance(seed=args.seed)}
     atomic_write_text(out.with_suffix(".json"), json.dumps(meta, indent=2) + "\n")
+    base = ex.baseline_condition
+    versus = (f"{base:.4g} ({base / ex.condition:.3g}x worse)" if np.isfinite(base) and np.isfinite(ex.condition)
+              else f"{base:.4g}" if np.isfinite(base) else "rank-deficient (infinite)")
     print(f"regressor condition number: {ex.condition:.4g} (column-scaled [Y | viscous, coulomb, offset]); "
-          f"the robot's default sine trajectory over the same {args.duration:g} s: {ex.baseline_condition:.4g} "
-          f"({ex.baseline_condition / ex.condition:.3g}x worse)")
+          f"the robot's default sine trajectory over the same {args.duration:g} s: {versus}")
     print(f"trajectory: {out} ({t.size} samples at {args.rate:g} Hz), coefficients: {out.with_suffix('.json')}")
     if log_path is not None:
         from ..identify.synthetic import synthetic_log

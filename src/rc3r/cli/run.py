@@ -39,10 +39,13 @@ def announce_compile(plant, rate=False) -> None:
 STIFF_NOTE_SUBSTEPS = 16
 
 
-def announce_engine(spec) -> None:
+def announce_engine(spec) -> str | None:
     """:func:`announce_compile` if the run will compile its simulator; if ``auto`` takes the python engine
     because the compiled one is not built yet (a short sampled run, :func:`rc3r.simulate.planned_engine`),
-    say that and how to build it."""
+    return the note that says so and how to build it (None otherwise).
+
+    The note is informational: the caller prints it after a run that finished, never beside the one
+    error line of a run that diverged (``rc3r run``)."""
     from ..simulate import default_substeps, plant_method, planned_engine, stiffness
 
     plant = spec.true_plant if spec.true_plant is not None else spec.plant
@@ -61,10 +64,11 @@ def announce_engine(spec) -> None:
     if why is not None:
         from ..simulate.engines.base import COLD_MAX_SUBSTEPS
 
-        _progress(f"rc3r: python engine: the compiled one is passed over, {why}; a run of over "
-                  f"{COLD_MAX_SUBSTEPS} sub-steps, --engine fast or RC3R_COLD_START=compile builds it (once)")
-    elif name == "fast":
+        return (f"rc3r: python engine: the compiled one is passed over, {why}; a run of over "
+                f"{COLD_MAX_SUBSTEPS} sub-steps, --engine fast or RC3R_COLD_START=compile builds it (once)")
+    if name == "fast":
         announce_compile(spec.plant, spec.options.rate)
+    return None
 
 
 def _fmt3(x) -> str:
@@ -157,7 +161,7 @@ def cmd_run(args) -> int:
         from ..animation import check_animatable, frame_count
 
         check_animatable(spec.plant, fmt)  # before anything is announced or simulated
-    announce_engine(spec)
+    engine_note = announce_engine(spec)  # said after a finished run only: a diverged one prints one error line
     for warning in spec.warnings:
         _progress(f"rc3r: warning: {warning}")
     _progress(f"rc3r run: {spec.name}: {describe_model(spec)}; {spec.options.mode}"
@@ -182,6 +186,8 @@ def cmd_run(args) -> int:
         print(f"rc3r: interrupted while writing the animation: the run is written to {out}/ without it",
               file=sys.stderr)
         return EXIT["interrupted"]
+    if engine_note is not None and res.ok:
+        _progress(engine_note)
     print(f"{verdict_text(m)}: {spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, "
           f"final bound = {_fmt3(m['final_error_bound'])} rad, chattering = {_fmt3(m['chattering'])} N m/s, "
           f"wall {m['wall_time_s']:.2f} s -> {out}/")

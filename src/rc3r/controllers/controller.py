@@ -60,6 +60,7 @@ class Controller:
             raise ParameterError("a delay needs a sampled controller (a rate)")
         self.law, self.model, self.trajectory = law, model, trajectory
         self.rate, self.delay = rate, int(delay)
+        self._finite = np.empty(2 * model.n + 1)
         self.reset()
 
     @classmethod
@@ -88,16 +89,42 @@ class Controller:
         u, zdot, diag = self.law.torque(self.model, q, qd, qd_ref, self.z)
         return np.asarray(u, dtype=float), np.asarray(zdot, dtype=float), float(diag)
 
+    @staticmethod
+    def _which_bad(t, q, qd, what: str) -> str:
+        """The message of a call with an argument that is not a finite number: which one, and its value."""
+        for name, x in (("t", t), ("q", q), ("qd", qd)):
+            try:
+                ok = bool(np.isfinite(np.asarray(x, dtype=float)).all())
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                return f"Controller.step: {name} {what}: {x!r}"
+        return f"Controller.step: an argument {what}"  # pragma: no cover - one of them failed
+
     def step(self, t: float, q, qd) -> np.ndarray:
         """The torque (n,) [N m] to apply from time ``t`` [s] on, given the measured ``q``, ``qd`` (n,).
 
         Calls must come in non-decreasing ``t``; a sampled controller computes a new torque at most
         once per period and holds it in between.
+
+        Raises
+        ------
+        ParameterError
+            Naming the argument: ``t``, ``q`` or ``qd`` not numbers, NaN or infinite (a torque computed
+            from them would be NaN), shapes other than (n,), or ``t`` before the last sample.
         """
-        q = np.asarray(q, dtype=float)
-        qd = np.asarray(qd, dtype=float)
+        try:
+            t = float(t)
+            q = np.asarray(q, dtype=float)
+            qd = np.asarray(qd, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(self._which_bad(t, q, qd, "is not a number")) from None
         if q.shape != (self.model.n,) or qd.shape != (self.model.n,):
             raise ParameterError(f"q and qd must be ({self.model.n},), got {q.shape}, {qd.shape}")
+        buf = self._finite  # t, q, qd side by side: one isfinite on the hot path
+        buf[0], buf[1:self.model.n + 1], buf[self.model.n + 1:] = t, q, qd
+        if not np.isfinite(buf).all():
+            raise ParameterError(self._which_bad(t, q, qd, "is NaN or infinite"))
         if self.rate is None:
             if self._t_last is not None:
                 if t < self._t_last:

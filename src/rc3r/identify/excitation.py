@@ -34,7 +34,8 @@ from ..errors import ConfigError
 from .regressors import identification_regressor
 
 __all__ = ["HARMONICS", "OBJECTIVE_POINTS", "CONSTRAINT_POINTS", "MAX_VELOCITY", "MAX_ACCELERATION", "LIMIT_MARGIN",
-           "Limits", "limits_of", "regressor_condition", "Excitation", "fourier_trajectory", "random_fourier", "excite"]
+           "Limits", "limits_of", "regressor_condition", "Excitation", "fourier_trajectory", "random_fourier", "excite",
+           "MIN_DURATION_S", "MAX_DURATION_S", "MAX_TRAJECTORY_SAMPLES", "check_length"]
 
 #: Harmonics per joint.
 HARMONICS = 5
@@ -53,6 +54,52 @@ MAX_ACCELERATION = 10.0
 
 #: Fraction of each position range kept free at both ends; ranges are clipped to [-pi, pi].
 LIMIT_MARGIN = 0.1
+
+#: Shortest period of an exciting trajectory [s] (shorter ones cannot move an arm within its velocity and
+#: acceleration bounds: the default trajectory's regressor over 0.1 s is rank-deficient).
+MIN_DURATION_S = 1.0
+
+#: Longest period [s] (one hour; the synthetic log simulates all of it).
+MAX_DURATION_S = 3600.0
+
+#: Most samples of the trajectory file (duration x rate + 1; 1e6 rows are about 100 MB of CSV).
+MAX_TRAJECTORY_SAMPLES = 1_000_000
+
+
+def check_length(duration: float, rate: float) -> int:
+    """The number of samples of a trajectory of ``duration`` s at ``rate`` Hz, or a one-line ConfigError.
+
+    Parameters
+    ----------
+    duration : float
+        Period and length of the trajectory [s], in [:data:`MIN_DURATION_S`, :data:`MAX_DURATION_S`].
+    rate : float
+        Samples per second of its file [Hz].
+
+    Returns
+    -------
+    int
+        ``duration * rate + 1`` samples, in [:data:`rc3r.identify.log.MIN_SAMPLES`,
+        :data:`MAX_TRAJECTORY_SAMPLES`] (a log of fewer samples is refused by ``rc3r identify``; more
+        would be a file of gigabytes).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``--duration`` (and ``--rate``) when either bound is not met.
+    """
+    from .log import MIN_SAMPLES
+
+    if not (math.isfinite(duration) and MIN_DURATION_S <= duration <= MAX_DURATION_S):
+        raise ConfigError(f"--duration {duration:g} s: an exciting trajectory lasts {MIN_DURATION_S:g} to "
+                          f"{MAX_DURATION_S:g} s")
+    if not (math.isfinite(rate) and rate > 0):
+        raise ConfigError(f"--rate must be finite and > 0 Hz, got {rate:g}")
+    samples = duration * rate + 1
+    if not MIN_SAMPLES <= samples <= MAX_TRAJECTORY_SAMPLES:
+        raise ConfigError(f"--duration {duration:g} s at --rate {rate:g} Hz is {samples:.4g} samples; a trajectory "
+                          f"has {MIN_SAMPLES} to {MAX_TRAJECTORY_SAMPLES:.0e}")
+    return int(samples)
 
 
 @dataclass(frozen=True)
@@ -220,8 +267,7 @@ def excite(robot, duration: float, seed: int = 0, harmonics: int = HARMONICS, li
     """An exciting trajectory of ``duration`` s for ``robot`` (module docstring)."""
     from scipy.optimize import minimize
 
-    if not (math.isfinite(duration) and duration > 0):
-        raise ConfigError(f"duration must be finite and > 0, got {duration}")
+    check_length(duration, check_rate)
     n, L = robot.n, int(harmonics)
     lim = limits or limits_of(robot)
     omega = 2.0 * math.pi / duration

@@ -17,7 +17,21 @@ line naming the file and what is wrong -- missing or unreadable file, unknown or
 duplicate columns, a number of joints other than the robot's, a row with the wrong
 number of fields, a field that is not a number, NaN or infinite values (with the
 row and column), time stamps that do not strictly increase, fewer than
-:data:`MIN_SAMPLES` samples.
+:data:`MIN_SAMPLES` samples; a corrupt NPZ (a bad zip, a bad CRC, a truncated array) or one whose
+arrays would take more than :data:`MAX_NPZ_BYTES` once unpacked; a CSV with a header and no rows.
+
+Hostile numbers are refused here too, so that what follows (resampling on a uniform grid at the
+median step, least squares on squares of the torques) can neither overflow nor allocate without
+bound:
+
+* a value of ``q``, ``qd``, ``tau`` or ``t`` beyond :data:`rc3r.io.MAX_MAGNITUDE` (1e12) in
+  magnitude: squares of 1e300 overflow double precision;
+* a time span (last stamp minus first) over :data:`MAX_SPAN_S` (1e6 s, 11.6 days);
+* a gap between two samples over :data:`MAX_GAP_STEPS` (100) times the median step: a spline
+  through a hole of a hundred samples invents the motion, and a gap of 1e6 s in a 1 kHz log would
+  make a grid of 1e9 points (7.4 GiB);
+* a span over :data:`MAX_GRID_RATIO` (4) times what the samples cover at the median step (the
+  uniform grid would have more than 4 N points: most of the log is gaps).
 """
 from __future__ import annotations
 
@@ -25,17 +39,34 @@ import csv
 import hashlib
 import re
 import stat
+import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ConfigError
+from ..io import MAX_MAGNITUDE
 
-__all__ = ["Log", "load_log", "save_log", "MIN_SAMPLES"]
+__all__ = ["Log", "load_log", "save_log", "MIN_SAMPLES", "MAX_SPAN_S", "MAX_GAP_STEPS", "MAX_GRID_RATIO",
+           "MAX_NPZ_BYTES"]
 
 #: Fewest samples a log may have (a fit needs many more than it has unknowns, too).
 MIN_SAMPLES = 100
+
+#: Longest time span of a log [s] (11.6 days; a 1 kHz log of it would be 1e9 samples).
+MAX_SPAN_S = 1e6
+
+#: Longest gap between two samples, in median time steps (the log is resampled on a uniform grid at
+#: the median step, by splines: a longer hole would be invented motion).
+MAX_GAP_STEPS = 100.0
+
+#: Largest ratio of the uniform grid's points (span / median step + 1) to the samples.
+MAX_GRID_RATIO = 4.0
+
+#: Largest total size of an NPZ log's arrays once unpacked [bytes] (a zip bomb is refused unread).
+MAX_NPZ_BYTES = 2 ** 31
 
 _COLUMN = re.compile(r"^(t|q|qd|tau)(\d*)$")
 
@@ -112,6 +143,15 @@ def _check(path: str, t, q, qd, tau, n: int | None) -> Log:
             what = "t" if name == "t" else f"{name}{col + 1}"
             raise ConfigError(f"log {path}: {what} is {x[row, col]} at sample {row + 1} (NaN or infinite; "
                               f"{len(bad)} such values)")
+    for name, x in (("t", t[:, None]), ("q", q), ("qd", qd), ("tau", tau)):
+        if x is None:
+            continue
+        big = np.argwhere(np.abs(x) > MAX_MAGNITUDE)
+        if big.size:
+            row, col = big[0]
+            what = "t" if name == "t" else f"{name}{col + 1}"
+            raise ConfigError(f"log {path}: {what} is {x[row, col]:g} at sample {row + 1}, beyond "
+                              f"{MAX_MAGNITUDE:g} in magnitude (SI units; {len(big)} such values)")
     if t.size < MIN_SAMPLES:
         raise ConfigError(f"log {path} has {t.size} samples, at least {MIN_SAMPLES} are needed")
     dt = np.diff(t)
@@ -119,6 +159,20 @@ def _check(path: str, t, q, qd, tau, n: int | None) -> Log:
         k = int(np.argmax(dt <= 0))
         raise ConfigError(f"log {path}: time does not increase at sample {k + 2} (t = {t[k + 1]!r} after "
                           f"{t[k]!r})")
+    span = float(t[-1] - t[0])
+    if span > MAX_SPAN_S:
+        raise ConfigError(f"log {path} spans {span:.4g} s (from t = {t[0]:.6g} to {t[-1]:.6g} s), more than "
+                          f"{MAX_SPAN_S:g} s")
+    step = float(np.median(dt))
+    k = int(np.argmax(dt))
+    if dt[k] > MAX_GAP_STEPS * step:
+        raise ConfigError(f"log {path}: a gap of {dt[k]:.4g} s between samples {k + 1} and {k + 2} (t = {t[k]:.6g} "
+                          f"to {t[k + 1]:.6g} s) is {dt[k] / step:.3g} median steps ({step:.3g} s); at most "
+                          f"{MAX_GAP_STEPS:g} are bridged: split the log")
+    if span / step + 1 > MAX_GRID_RATIO * t.size:
+        raise ConfigError(f"log {path}: {t.size} samples over {span:.4g} s at a median step of {step:.3g} s: "
+                          f"gaps fill most of it (a uniform grid at that step has {span / step + 1:.3g} points, "
+                          f"more than {MAX_GRID_RATIO:g} x the samples)")
     return Log(t, q, tau, qd, path)
 
 
@@ -178,6 +232,8 @@ def _load_csv(path: Path, data: bytes, n: int | None) -> Log:
     header = next(csv.reader([lines[0]]))
     cols = _columns(str(path), header)
     width = len(header)
+    if not any(line.strip() for line in lines[1:]):  # numpy would warn "input contained no data"
+        raise ConfigError(f"log {path} has a header and no rows (0 samples, at least {MIN_SAMPLES} are needed)")
     try:
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2, dtype=float)
     except ValueError:
@@ -203,10 +259,19 @@ def _load_csv(path: Path, data: bytes, n: int | None) -> Log:
 
 def _load_npz(path: Path, n: int | None) -> Log:
     try:
+        with zipfile.ZipFile(path) as zf:
+            unpacked = sum(info.file_size for info in zf.infolist())
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
+        raise ConfigError(f"log {path}: not a readable NPZ file: {exc}") from None
+    if unpacked > MAX_NPZ_BYTES:
+        raise ConfigError(f"log {path}: its arrays would take {unpacked / 2 ** 30:.3g} GiB unpacked, more than "
+                          f"{MAX_NPZ_BYTES / 2 ** 30:g} GiB")
+    try:
         with np.load(path, allow_pickle=False) as z:
             arrays = {k: np.asarray(z[k]) for k in z.files}
-    except (ValueError, OSError, EOFError) as exc:
-        raise ConfigError(f"log {path}: not a readable NPZ file: {exc}") from None
+    except (ValueError, OSError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, MemoryError) as exc:
+        # a bad CRC or a truncated member (BadZipFile, zlib.error), a corrupt .npy header (ValueError)
+        raise ConfigError(f"log {path}: not a readable NPZ file: {type(exc).__name__}: {exc}") from None
     unknown = sorted(set(arrays) - {"t", "q", "qd", "tau"})
     missing = [k for k in ("t", "q", "tau") if k not in arrays]
     if unknown or missing:

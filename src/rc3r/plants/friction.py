@@ -21,7 +21,12 @@ import numpy as np
 from ..errors import ConfigError
 from .base import Effect, per_joint, register_effect
 
-__all__ = ["Friction"]
+__all__ = ["Friction", "MAX_FRICTION"]
+
+#: Largest friction coefficient of a plant: viscous [N m s/rad], Coulomb and offset [N m] (in magnitude).
+#: The largest industrial arms' joints deliver some 1e4 N m; 1e5 bounds what is physically plausible and
+#: keeps the plant integrable (a viscous 1e300 left the arm frozen, "clean").
+MAX_FRICTION = 1e5
 
 
 def _vector(name, x, n) -> np.ndarray:
@@ -61,6 +66,12 @@ class Friction(Effect):
         object.__setattr__(self, "offset", off)
         if not (np.isfinite(self.v_s) and self.v_s > 0):
             raise ConfigError(f"friction v_s must be finite and > 0, got {self.v_s}")
+        for name in ("viscous", "coulomb", "offset"):
+            x = getattr(self, name)
+            if np.any(np.abs(x) > MAX_FRICTION):
+                shown = ", ".join(f"{v:g}" for v in np.ravel(x))
+                raise ConfigError(f"friction {name} [{shown}] is beyond {MAX_FRICTION:g} "
+                                  f"({'N m s/rad' if name == 'viscous' else 'N m'}): not a physical joint")
 
     @property
     def n(self) -> int:

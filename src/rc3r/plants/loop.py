@@ -28,7 +28,12 @@ import numpy as np
 from ..errors import ConfigError
 from .base import per_joint as _vec
 
-__all__ = ["LoopEffects"]
+__all__ = ["LoopEffects", "MAX_NOISE"]
+
+#: Largest standard deviation of the sensor noise and largest encoder step, per joint: ``noise_q`` and
+#: ``quantization`` 1 rad (or m), ``noise_qd`` 100 rad/s (or m/s). Beyond them no sensor is meant (a
+#: noise of 1e300 made every run "diverged at t = 0").
+MAX_NOISE = {"noise_q": 1.0, "noise_qd": 100.0, "quantization": 1.0}
 
 
 @dataclass(frozen=True)
@@ -67,6 +72,10 @@ class LoopEffects:
         n = self.n
         for name in ("noise_q", "noise_qd", "quantization"):
             object.__setattr__(self, name, _vec(name, getattr(self, name), n))
+            if np.any(getattr(self, name) > MAX_NOISE[name]):
+                shown = ", ".join(f"{v:g}" for v in getattr(self, name))
+                raise ConfigError(f"{name} [{shown}] is beyond {MAX_NOISE[name]:g} "
+                                  f"({'rad/s' if name == 'noise_qd' else 'rad'}): not a sensor")
         for name in ("q0_error", "qd0_error"):
             object.__setattr__(self, name, _vec(name, getattr(self, name), n, signed=True))
         if isinstance(self.delay, bool) or not isinstance(self.delay, (int, np.integer)) or not 0 <= self.delay <= 1000:
