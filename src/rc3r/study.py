@@ -39,7 +39,7 @@ from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
 from .uncertainty import certified_bounds, certified_radius, load_box, paper_bounds, perturb
 
-__all__ = ["RunSpec", "build_run", "execute", "resolve_box", "CONFIG_KEYS"]
+__all__ = ["RunSpec", "build_run", "design_warning", "execute", "resolve_box", "CONFIG_KEYS"]
 
 
 @dataclass(frozen=True)
@@ -70,8 +70,9 @@ class RunSpec:
 #: Keys a run configuration may hold, per table (docs/control.md).
 CONFIG_KEYS = {
     "": ("robot", "urdf", "lock", "bounds", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains",
-         "trajectory", "simulation", "tolerance"),
+         "trajectory", "simulation", "tolerance", "design"),
     "payload": ("mass", "com"),
+    "design": ("verified", "law", "rate", "margin", "worst_plant", "loop_gain", "note"),
     "plant": ("spec", "urdf", "box", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
               "q0_error", "qd0_error", "noise_seed", "engine"),
     "model": ("theta", "rho"),
@@ -95,9 +96,27 @@ def _check_keys(table, allowed, where: str) -> dict:
     return table
 
 
+def design_warning(cfg: dict | None) -> str | None:
+    """One line for a configuration written by ``rc3r design`` whose design did not verify
+    (``[design] verified = false``), else None. ``rc3r run``, ``montecarlo`` and ``export`` print it."""
+    note = design_unverified(cfg)
+    if note is None:
+        return None
+    return (f"rc3r: warning: this design.toml did NOT verify ({note}); its gains are unverified: "
+            "see its design.md and docs/design.md, 'When the design is not clean'")
+
+
+def design_unverified(cfg: dict | None) -> str | None:
+    """Why a configuration written by ``rc3r design`` is not verified (its ``[design] note``), or None."""
+    d = (cfg or {}).get("design")
+    if not isinstance(d, dict) or d.get("verified", True) is not False:
+        return None
+    return str(d.get("note") or "no robust law was clean on every plant")
+
+
 def _check_config(cfg: dict, kind_override=None) -> None:
     _check_keys(cfg, CONFIG_KEYS[""], "")
-    for table in ("plant", "model", "trajectory", "simulation", "payload"):
+    for table in ("plant", "model", "trajectory", "simulation", "payload", "design"):
         if table in cfg:
             _check_keys(cfg[table], CONFIG_KEYS[table], table)
     if "controller" in cfg:
@@ -118,6 +137,8 @@ def _check_config(cfg: dict, kind_override=None) -> None:
     for law, table in gains.items():
         names = [f for f in LAWS[law].__dataclass_fields__ if f not in ("theta", "rho", "rho_i")]
         _check_keys(table, names + (["eps"] if "eps_i" in names else []), f"gains.{law}")
+    if "verified" in cfg.get("design", {}) and not isinstance(cfg["design"]["verified"], bool):
+        raise ConfigError(f"config: [design] verified must be true or false, got {cfg['design']['verified']!r}")
     seed = cfg.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise ConfigError(f"config: seed must be an integer in [0, 2^63), got {seed!r}")

@@ -89,7 +89,7 @@ class _Bar:
 def cmd_design(args) -> int:
     """``rc3r design``: the rule, the verification, the files (module docstring)."""
     from ..campaign import RunTable, columns
-    from ..design.report import design_figure, design_markdown, design_toml
+    from ..design.report import design_figure, design_markdown, design_toml, failure_line, next_steps
     from ..design.verify import design_config, verify_design
     from ..campaign.runner import prepare
     from ..study import build_run
@@ -137,7 +137,8 @@ def cmd_design(args) -> int:
     g = res.gains()["robust"]
     fbl = res.baselines.get("fbl", {}).get("worst_error")
     ch = res.chosen
-    worst = None if ch is None else ch["at_rate"]["worst_error"]
+    last = ch or (max(res.levels, key=lambda x: x["eps"]) if res.levels else None)
+    worst = None if last is None else last["at_rate"].get("worst_error")
     word = "clean" if res.eq6_ok else ("NOT clean (eq. 6; eq. 7 is)" if res.ok else "NOT clean")
     low = res.lowest_clean_rate()
     def num(x, fmt=".3g"):
@@ -148,14 +149,19 @@ def cmd_design(args) -> int:
         ("; diagonal of b M(q_d(0))" if kk.ndim == 2 else "") + \
         (f"] + {g['K_inertia']:.4g} M(q) [scheduled" if g.get("K_inertia") else "")
     print(f"{word}: eps = {g['eps']:.4g} (rule: {res.design.eps:.4g}, stability boundary {res.design.eps_stable:.4g}), "
-          f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad (FBL {num(fbl)}); lowest clean "
+          f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad{'' if ch else ' (largest eps tried)'} (FBL {num(fbl)}); lowest clean "
           f"rate {num(low, '.4g')} Hz; {len(res.levels)} eps tried, wall {wall:.1f} s -> {out}/")
     rec = res.recommendation()
     if rec is not None:
         print(f"recommended robust law: {rec['law']} ({rec['why']}; FBL {num(rec['fbl_worst_error'])} rad)")
+    for law, w in res.worst.items():
+        print(f"hardest plant for {law}: {w['spec'][:48]}{'...' if len(w['spec']) > 48 else ''}: T lambda_max = "
+              f"{w['T_lambda']:.3g} (limit {w['limit']:.3g}; the rule's on the controller's model "
+              f"{num(w.get('model_T_lambda'))})")
     if not res.ok:
-        print(f"rc3r design: neither eq. 6 (no eps tried) nor eq. 7 was clean on every plant at {args.rate:g} and "
-              f"{args.rate / args.margin:g} Hz; {out}/design.toml has the rule's gains, unverified (see design.md)",
-              file=sys.stderr)
+        print(f"rc3r design: NOT verified: neither eq. 6 (no eps tried was clean) nor eq. 7 was clean on every plant "
+              f"at {args.rate:g} and {args.rate / args.margin:g} Hz: {failure_line(res)}", file=sys.stderr)
+        print("rc3r design: to try: " + "; ".join(next_steps(res)) + f". {out}/design.toml says verified = false "
+              "(run, montecarlo and export warn; export refuses it without --force)", file=sys.stderr)
         return EXIT["check_failed"]
     return EXIT["ok"]

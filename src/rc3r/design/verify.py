@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import ConfigError
 from .rule import fast_design, spectrum
 
-__all__ = ["DesignResult", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
+__all__ = ["DesignResult", "controller_model", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
 
 
 def design_config(config: dict | None = None, **options) -> dict:
@@ -52,6 +52,7 @@ def design_config(config: dict | None = None, **options) -> dict:
         raise ConfigError("rc3r design chooses the gains: remove [gains] and the gains of [controller] from --config")
     cfg.pop("controller", None)
     cfg.pop("gains", None)
+    cfg.pop("design", None)
     given = [k for k in ("payload", "box", "bounds") if options.get(k) is not None]
     if len(given) > 1:
         raise ConfigError(f"give one of --payload, --box, --bounds, not {' and '.join('--' + k for k in given)}")
@@ -134,6 +135,20 @@ class DesignResult:
     spectrum: dict = field(default_factory=dict)
     effort_limit: list | None = None
     eps_i: float | None = None
+    search: str = "off"
+
+    @property
+    def worst(self) -> dict:
+        """Per robust law, the hardest plant searched for its verified (else last tried) gains, with
+        ``T_lambda`` (on that plant), ``model_T_lambda`` (the rule's, on the controller's model) and ``limit``."""
+        out = {}
+        lv = self.chosen or (max(self.levels, key=lambda x: x["eps"]) if self.levels else None)
+        if lv and lv.get("worst"):
+            out["robust"] = {**lv["worst"], "model_T_lambda": lv.get("model_T_lambda"), "eps": lv["eps"]}
+        rc = self.baselines.get("robust-coeff") or {}
+        if rc.get("worst"):
+            out["robust-coeff"] = {**rc["worst"], "model_T_lambda": rc.get("model_T_lambda"), "eps_i": rc["eps_i"]}
+        return out
 
     @property
     def eq6_ok(self) -> bool:
@@ -197,7 +212,7 @@ class DesignResult:
                 "low_rates": self.low_rates, "lowest_clean_rate": self.lowest_clean_rate(),
                 "plants": self.plants, "model": self.model, "spectrum": self.spectrum,
                 "effort_limit": self.effort_limit, "gains": self.gains(), "config": self.config,
-                "recommendation": self.recommendation()}
+                "recommendation": self.recommendation(), "search": self.search, "worst": self.worst}
 
 
 def _resolve(cfg: dict, rate: float):
@@ -211,6 +226,18 @@ def _resolve(cfg: dict, rate: float):
     except ConfigError:
         pass
     return spec, rho_i
+
+
+def controller_model(spec):
+    """The controller's own model of a resolved run: the arm's kinematics with the law's theta_0
+    (:class:`rc3r.design.rule.ThetaModel`); every figure of the rule and of the report is computed on it."""
+    from .rule import ThetaModel
+
+    theta0 = spec.model.get("theta0")
+    if theta0 is None:
+        return ThetaModel(spec.robot_model, spec.robot_model.theta, f"theta of {spec.robot_model.label}")
+    src = spec.model.get("theta_source") or "theta_0"
+    return ThetaModel(spec.robot_model, theta0, f"the controller's theta_0 ({src})")
 
 
 def start_eps(design, sp, rate: float, margin: float, rho: float) -> float:
@@ -260,9 +287,81 @@ class _Runner:
         return [self.rows[j.id] for j in jobs if j.id in self.rows]
 
 
+def deciding(rows: list[dict], searched=()) -> dict | None:
+    """The plant that decided a rejected level: of the runs that were not clean, the one with the most severe
+    verdict (diverged before limit-violated, saturated, chattering), a searched worst plant first among equals,
+    then the largest max|e|; ``{"plant", "verdict", "rate", "max_error", "searched"}`` or None if all were clean."""
+    from ..simulate.verdict import VERDICTS
+
+    bad = [r for r in rows if r["verdict"] != "clean"]
+    if not bad:
+        return None
+
+    def name(r):
+        return f"random:{r['plant_seed']}" if r.get("plant_seed") not in (None, "") else str(r["job"]).split("/")[0]
+
+    sev = {v: i for i, v in enumerate(VERDICTS)}
+    r = min(bad, key=lambda r: (sev.get(r["verdict"], 0), name(r) not in searched,
+                                -float(r["max_error"]) if np.isfinite(r["max_error"]) else -np.inf))
+    return {"plant": name(r), "verdict": r["verdict"], "rate": r["rate_hz"], "max_error": float(r["max_error"]),
+            "searched": name(r) in searched}
+
+
+class _Hardest:
+    """The worst-plant search of a design (:mod:`rc3r.design.worst`) on its bounds: a box of standard
+    parameters (searched corner by corner), a payload range (its two ends, exact), an identified ellipsoid
+    (not searched: its centre and draws only)."""
+
+    def __init__(self, cfg, spec, sp, rate, delay):
+        from .worst import Search
+
+        self.rate, self.delay = float(rate), int(delay)
+        self.search = Search(spec.robot_model, sp, spec.trajectory)
+        self.kind, self.box, self.ends = "off", None, {}
+        if cfg.get("payload"):
+            from ..study import _payload, _payload_plant
+
+            pay = _payload(cfg["payload"]["mass"], cfg["payload"].get("com"))
+            self.kind = "payload"
+            self.ends = {e: _payload_plant(spec.robot_model, pay, e).theta for e in ("lower", "upper")}
+        elif not cfg.get("bounds"):
+            from ..study import resolve_box
+
+            self.kind, self.box = "box", resolve_box(spec.robot_model, cfg.get("box"))
+
+    def gains(self, sliding, **w):
+        from .worst import loop_gains
+
+        return loop_gains(self.search, sliding, **w)
+
+    def model_gain(self, sliding, **w) -> float:
+        """T max_t lambda_max(M_0^-1 G): the rule's own figure on the controller's model."""
+        from .worst import plant_gain
+
+        return float(np.max(plant_gain(self.gains(sliding, **w), self.search.M0)[0]) / self.rate)
+
+    def plants(self, sliding, **w) -> list[dict]:
+        """The hardest plants for the law's gains (most demanding first, at most 3)."""
+        from .rule import stability_limit
+        from .worst import plant_gain, search_box
+
+        G = self.gains(sliding, **w)
+        if self.kind == "box":
+            return search_box(self.search, self.box, G, self.rate, delay=self.delay)[:3]
+        out = []
+        for end, theta in self.ends.items():
+            lam, _ = plant_gain(G, self.search.mass(theta))
+            k = int(np.argmax(lam))
+            out.append({"spec": end, "T_lambda": float(lam[k] / self.rate), "t": float(self.search.sp.t[k]),
+                        "limit": stability_limit(self.delay),
+                        "why": f"the payload's {end} end (M grows with the mass: the lower end is the lightest "
+                               "in every direction)"})
+        return sorted(out, key=lambda e: -e["T_lambda"])
+
+
 def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int = 50, seed: int = 0,
                   workers: int | None = None, scheduler: str | None = None, steps: int = 3,
-                  progress=None) -> DesignResult:
+                  progress=None, search: bool = True) -> DesignResult:
     """Design and verify the gains for ``rate`` [Hz] (module docstring).
 
     Parameters
@@ -285,6 +384,8 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
         At most this many halvings and doublings of eps.
     progress : callable, optional
         ``progress(what, count)``: a new batch of ``count`` runs (``what`` a label), or ``(None, 1)`` a run done.
+    search : bool
+        Add the hardest plants of the bounds for each eps tried (:mod:`rc3r.design.worst`) to the plants.
     """
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise ConfigError(f"--rate must be a finite number of Hz > 0, got {rate!r}")
@@ -293,12 +394,14 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     spec, rho_i = _resolve(cfg, rate)
     duration = spec.options.duration
     delay = 0 if spec.loop is None else int(spec.loop.delay)
-    sp = spectrum(spec.robot_model, spec.trajectory, duration)
+    model = controller_model(spec)
+    sp = spectrum(model, spec.trajectory, duration)
     rho = float(spec.model["rho"])
     design = fast_design(sp, rate, rho=rho, rho_i=rho_i, delay=delay)
     plants = plant_specs(cfg, n, seed)
     res = DesignResult(cfg, float(rate), float(margin), design, None, plants=[s for _, s in plants],
                        model={**{k: spec.model.get(k) for k in ("rho", "theta_source", "rho_source", "box", "nominal")},
+                              "controller_model": model.label,
                               "box": spec.model.get("box") or (f"identified bounds {spec.model['bounds_file']}"
                                                                if spec.model.get("bounds_file") else None)},
                        spectrum={"m_min": sp.m_min, "m_max": sp.m_max, "L_Y": sp.lam_yy(), "samples": int(sp.t.size),
@@ -307,15 +410,25 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     run = _Runner(cfg, table, duration, workers, scheduler, progress)
     sliding = {k: v for k, v in design.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
     low = rate / margin
+    hard = _Hardest(cfg, spec, sp, rate, delay) if search else None
+    res.search = hard.kind if hard is not None else "off"
+
+    def with_worst(entries):
+        names = {s for _, s in plants}
+        return plants + [(-1, e["spec"]) for e in entries if e["spec"] not in names]
 
     def level(eps):
-        jobs = run.jobs("robust", sliding, eps, rate, plants) + \
-            (run.jobs("robust", sliding, eps, low, plants) if margin > 1 else [])
+        found = hard.plants(sliding, rho=rho, eps=eps) if hard is not None else []
+        pl = with_worst(found)
+        jobs = run.jobs("robust", sliding, eps, rate, pl) + \
+            (run.jobs("robust", sliding, eps, low, pl) if margin > 1 else [])
         rows = run.run(jobs, f"robust, eps {eps:.4g}")
         at = summarize([r for r in rows if r["rate_hz"] == float(rate)])
         lo = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else at
         lv = {"eps": float(eps), "factor": float(eps / design.eps), "at_rate": at, "at_low": lo,
-              "clean": bool(at["clean"] and lo["clean"])}
+              "clean": bool(at["clean"] and lo["clean"]), "worst": found[0] if found else None,
+              "model_T_lambda": hard.model_gain(sliding, rho=rho, eps=eps) if hard is not None else None,
+              "decided_by": deciding(rows, {e["spec"] for e in found}), "plants": len(pl)}
         res.levels.append(lv)
         return lv["clean"]
 
@@ -343,24 +456,30 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     res.eps = clean
     res.levels.sort(key=lambda lv: lv["eps"])
     factor = 1.0 if res.eps is None else res.eps / design.eps
-    fbl = run.run(run.jobs("fbl", design.gains("fbl"), None, rate, plants), "fbl baseline")
+    chosen = res.chosen
+    hardest = with_worst([chosen["worst"]] if chosen is not None and chosen.get("worst") else [])
+    fbl = run.run(run.jobs("fbl", design.gains("fbl"), None, rate, hardest), "fbl baseline")
     res.baselines["fbl"] = summarize(fbl)
     if design.eps_i is not None:
         sl = dict(sliding)
         tried = [design.eps_i * factor] + ([design.eps_i] if factor != 1.0 else [])
-        for eps_i in tried:  # verified like eq. 6: every plant at the rate and at rate / margin
-            jobs = run.jobs("robust-coeff", sl, eps_i, rate, plants) + \
-                (run.jobs("robust-coeff", sl, eps_i, low, plants) if margin > 1 else [])
+        for eps_i in tried:  # verified like eq. 6: every plant (and the hardest) at the rate and at rate / margin
+            found = hard.plants(sl, rho_i=rho_i, eps_i=eps_i) if hard is not None else []
+            pl = with_worst(found)
+            jobs = run.jobs("robust-coeff", sl, eps_i, rate, pl) + \
+                (run.jobs("robust-coeff", sl, eps_i, low, pl) if margin > 1 else [])
             rows = run.run(jobs, f"robust-coeff, eps_i {eps_i:.4g}")
             rc = summarize([r for r in rows if r["rate_hz"] == float(rate)])
             rc_low = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else rc
-            res.baselines["robust-coeff"] = {**rc, "eps_i": float(eps_i), "at_low": rc_low,
-                                             "clean_low": bool(rc_low["clean"])}
+            res.baselines["robust-coeff"] = {
+                **rc, "eps_i": float(eps_i), "at_low": rc_low, "clean_low": bool(rc_low["clean"]),
+                "worst": found[0] if found else None, "decided_by": deciding(rows, {e["spec"] for e in found}),
+                "model_T_lambda": hard.model_gain(sl, rho_i=rho_i, eps_i=eps_i) if hard is not None else None}
             res.eps_i = float(eps_i)
             if rc["clean"] and rc_low["clean"]:
                 break
     res.baselines["adaptive"] = summarize(run.run(run.jobs("adaptive", design.gains("adaptive"), None, rate,
-                                                           plants), "adaptive"))
+                                                           hardest), "adaptive"))
     if res.eps is not None:
         r = low
         for _ in range(4):

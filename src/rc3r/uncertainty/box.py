@@ -311,8 +311,9 @@ def perturb(robot, box: Box, spec: str, *, simulable: bool = False):
     * ``"nominal"`` -- ``robot`` itself;
     * ``"upper"`` / ``"lower"`` -- every delta at its upper / lower end;
     * ``"paper-upper"`` -- ``p_up`` of the paper's method (:func:`rc3r.uncertainty.bounds.paper_upper`);
-    * ``"corner:<bits>"`` -- ``box.size`` characters ``0`` (lower) / ``1`` (upper)
-      in parameter order (``_`` separators allowed);
+    * ``"corner:<bits>"`` -- ``box.size`` characters ``0`` (lower) / ``1`` (upper) / ``n`` (nominal)
+      in parameter order (``_`` separators allowed); ``"corner:<bits>@<s>"`` the corner's delta times
+      s in [0, 1] (a corner pulled toward the nominal robot: ``rc3r design``'s worst-plant search);
     * ``"random:<seed>"`` -- uniform in the box, ``numpy.random.default_rng(seed)``.
 
     By default the result is only checked for mass > 0: many draws of a box have
@@ -368,13 +369,21 @@ def _perturb(robot, box: Box, spec, simulable: bool):
 
         return paper_upper(robot, box)
     if kind == "corner":
-        bits = arg.replace("_", "")
-        if len(bits) != box.size or set(bits) - {"0", "1"}:
+        bits, at, frac = arg.replace("_", "").partition("@")
+        if len(bits) != box.size or set(bits) - {"0", "1", "n"}:
             raise ConfigError(
-                f"bad perturbation {spec!r}: 'corner:' needs {box.size} characters 0/1 (lower/upper) in the "
+                f"bad perturbation {spec!r}: 'corner:' needs {box.size} characters 0/1/n (lower/upper/nominal) in the "
                 f"order {box.names[0]} ... {box.names[-1]}, got {len(bits)} characters"
             )
-        return shifted(robot, box.corner([c == "1" for c in bits]), s)
+        try:
+            scale = float(frac) if at else 1.0
+        except ValueError:
+            scale = float("nan")
+        if not 0.0 <= scale <= 1.0:
+            raise ConfigError(f"bad perturbation {spec!r}: 'corner:<bits>@<s>' needs 0 <= s <= 1 (the corner's "
+                              "delta times s)")
+        delta = np.where([c == "n" for c in bits], 0.0, box.corner([c == "1" for c in bits]))
+        return shifted(robot, scale * delta, s)
     if kind == "random":
         rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad perturbation"))
         for _ in range(10_000 if simulable else 1):

@@ -1,0 +1,227 @@
+r"""The hardest plants of the bounds for a law's gains at a rate (``rc3r design``'s worst-plant search).
+
+Inside its boundary layer a sliding law acts on r with the gain :math:`G = K + b M_0(q) + Y W Y^T`
+(:math:`W = (\rho/\epsilon) I` for eq. 6, :math:`\mathrm{diag}(\rho_i/\epsilon_i)` for eq. 7, :math:`M_0` the
+controller's own M); on a plant of mass matrix :math:`M_p` the held loop at period T is stable while
+:math:`T\lambda_{\max}(M_p^{-1} G) <` :func:`rc3r.design.rule.stability_limit` (2 without delay). Random
+draws seldom visit the corner of the bounds where :math:`M_p` is lightest along G's top direction; this
+module searches for it:
+
+* for a fixed direction x at a reference sample, :math:`x^T M(q;\theta) x` is linear in theta, so its
+  minimiser over a box of standard parameters is a corner (each parameter at the end that lowers it,
+  by the sign of its gradient); over a payload range (M increasing in the mass) it is the lightest end;
+* :func:`search_box` alternates: the top generalized eigenvector of :math:`(G, M_p)` over the reference
+  samples gives the direction, the corner that minimises the inertia along it gives the next plant;
+  it keeps the plant with the largest :math:`T\lambda_{\max}` and, beside it, the corners of the top
+  directions of the nominal plant (the smallest inertia in the directions that matter). A corner that
+  cannot be simulated (mass <= 0, inertia not positive definite) is pulled toward the nominal robot
+  (``corner:<bits>@<s>``, s = 1, 0.75, 0.5, 0.25) until it can.
+
+Every figure is exact on the realised plant (its own theta); the linear model is only used to pick
+the corner. No random draw is made: the search is deterministic.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .rule import ThetaModel, stability_limit
+
+__all__ = ["loop_gains", "plant_gain", "search_box", "Search"]
+
+
+class Search:
+    """The reference samples and the kinematics a search needs, computed once per design.
+
+    Parameters
+    ----------
+    nominal : Robot
+        The arm (the kinematics; the plants are built from it).
+    spectrum : rc3r.design.rule.Spectrum
+        The controller's model along the reference (its samples, regressors and M).
+    trajectory : Trajectory
+        The reference.
+    """
+
+    def __init__(self, nominal, spectrum, trajectory):
+        self.nominal, self.sp = nominal, spectrum
+        qd, _, _ = trajectory.evaluate(spectrum.t)
+        self.q = np.asarray(qd, dtype=float)
+        kin = ThetaModel(nominal, nominal.theta)
+        self.dM = np.array([kin.dM(q) for q in self.q])  # (N, n, n, p)
+        L = np.linalg.inv(spectrum.chol_inv)  # M0 = (Li^T Li)^-1 = L L^T
+        self.M0 = L @ np.transpose(L, (0, 2, 1))
+
+    def mass(self, theta) -> np.ndarray:
+        """M(q_d(t); theta) at every sample, (N, n, n)."""
+        M = self.dM @ np.asarray(theta, dtype=float)
+        return 0.5 * (M + np.transpose(M, (0, 2, 1)))
+
+
+def loop_gains(search: Search, gains: dict, *, rho=None, eps=None, rho_i=None, eps_i=None) -> np.ndarray:
+    """G(t) of a sliding law along the reference, (N, n, n): ``K + K_inertia M0 + Y W Y^T``."""
+    sp = search.sp
+    n = sp.n
+    K = np.asarray(gains.get("K", 0.0), dtype=float)
+    K = np.diag(np.broadcast_to(K, (n,))) if K.ndim < 2 else K
+    if eps_i is not None:
+        w = np.asarray(rho_i, dtype=float) / np.asarray(eps_i, dtype=float)
+    else:
+        w = np.full(sp.Y.shape[2], float(rho) / float(eps))
+    YW = sp.Y * w
+    G = K + float(gains.get("K_inertia", 0.0)) * search.M0 + YW @ np.transpose(sp.Y, (0, 2, 1))
+    return 0.5 * (G + np.transpose(G, (0, 2, 1)))
+
+
+def plant_gain(G, Mp):
+    """``(lambda_max(M_p^-1 G) per sample (N,), top generalized eigenvectors (N, n))``; inf where M_p is not PD."""
+    N, n, _ = G.shape
+    lam = np.full(N, np.inf)
+    X = np.zeros((N, n))
+    for k in range(N):
+        try:
+            L = np.linalg.cholesky(Mp[k])
+        except np.linalg.LinAlgError:
+            continue
+        Li = np.linalg.inv(L)
+        w, V = np.linalg.eigh(Li @ G[k] @ Li.T)
+        lam[k] = w[-1]
+        X[k] = Li.T @ V[:, -1]
+    return lam, X
+
+
+def _simulable(robot) -> bool:
+    from ..errors import ParameterError
+
+    try:
+        robot.require_simulable()
+    except ParameterError:
+        return False
+    return True
+
+
+def _jacobian(robot, std) -> np.ndarray:
+    """d theta / d standard parameters at ``std`` (p, 10 bodies), central differences."""
+    std = np.asarray(std, dtype=float)
+    J = np.zeros((robot.p, std.size))
+    for k in range(std.size):
+        h = 1e-6 * max(1.0, abs(std[k]))
+        e = np.zeros(std.size)
+        e[k] = h
+        J[:, k] = (robot.theta_of_standard(std + e) - robot.theta_of_standard(std - e)) / (2 * h)
+    return J
+
+
+def search_box(search: Search, box, G, rate: float, *, delay: int = 0, directions: int = 3, rounds: int = 6,
+               shrink=(1.0, 0.9, 0.75, 0.5, 0.25, 0.1)) -> list[dict]:
+    """The hardest plants of a box of standard parameters for the gain G (module docstring).
+
+    Returns
+    -------
+    list of dict
+        Most demanding first, each ``{"spec": "corner:<bits>[@s]", "T_lambda": float, "t": float,
+        "limit": stability_limit(delay), "why": str}``; ``T_lambda`` is :math:`T\\max_t\\lambda_{\\max}(M_p^{-1}G)`
+        on the realised plant. Duplicates removed.
+    """
+    from ..uncertainty.box import perturb
+
+    nominal = search.nominal
+    T = 1.0 / float(rate)
+    std0 = nominal.standard_parameters()
+    J = _jacobian(nominal, std0)
+    limit = stability_limit(delay)
+    found: dict[str, dict] = {}
+
+    products = np.array([str(nm).startswith(("Ixy", "Ixz", "Iyz")) for nm in box.names])
+
+    def realise(bits):
+        """The plant of corner ``bits`` (1 upper, 0 lower, None nominal) made simulable: first the products of
+        inertia left nominal, then the whole delta pulled toward the nominal robot, until it is simulable."""
+        text = "".join("n" if b is None else "1" if b else "0" for b in bits)
+        tries = [(text, s) for s in shrink[:1]]
+        if products.any():
+            fixed = "".join("n" if p else c for c, p in zip(text, products))
+            tries += [(fixed, s) for s in shrink]
+        tries += [(text, s) for s in shrink[1:]]
+        for text, s in tries:
+            spec = f"corner:{text}" + ("" if s == 1.0 else f"@{s:g}")
+            try:
+                plant = perturb(nominal, box, spec)
+            except Exception:  # noqa: BLE001 -- a mass <= 0 at this s: pull further in
+                continue
+            if not _simulable(plant):
+                continue
+            Mp = search.mass(plant.theta)
+            if np.all(np.linalg.eigvalsh(Mp)[:, 0] > 0):
+                return spec, Mp
+        return None, None
+
+    def corner_for(x, k):
+        """The corner (1 upper, 0 lower, None nominal per standard parameter) of least x^T M(q_k) x: the signs
+        of the gradient first (exact where theta is linear in the standard parameters), then coordinate
+        passes on the exact x^T M x (theta need not be linear in them: the 3R's centres of mass)."""
+        g = np.einsum("i,ijp,j->p", x, search.dM[k], x)  # d(x^T M x)/d theta at sample k
+        c = g @ J  # ... per standard parameter
+        tiny = 1e-9 * max(float(np.max(np.abs(c))), 1e-300)
+        bits = [None if abs(v) <= tiny else bool(v < 0) for v in c]
+
+        def delta(b):
+            return np.array([0.0 if v is None else (box.upper[j] if v else box.lower[j]) for j, v in enumerate(b)])
+
+        def f(b):
+            return float(g @ nominal.theta_of_standard(std0 + delta(b)))
+
+        best = f(bits)
+        for _ in range(2):
+            changed = False
+            for j in range(len(bits)):
+                for v in (None, False, True):
+                    if v is bits[j]:
+                        continue
+                    trial = bits[:j] + [v] + bits[j + 1:]
+                    val = f(trial)
+                    if val < best - 1e-12 * abs(best):
+                        bits, best, changed = trial, val, True
+            if not changed:
+                break
+        return bits
+
+    def keep(spec, Mp, why):
+        lam, X = plant_gain(G, Mp)
+        k = int(np.argmax(lam))
+        entry = {"spec": spec, "T_lambda": float(T * lam[k]), "t": float(search.sp.t[k]), "limit": float(limit),
+                 "why": why}
+        if spec not in found or found[spec]["T_lambda"] < entry["T_lambda"]:
+            found[spec] = entry
+        return lam, X
+
+    lam0, X0 = keep("nominal", search.mass(nominal.theta), "the nominal robot (where the search starts)")
+    # the smallest inertia in the top directions of the nominal plant (distinct samples, largest gains first)
+    order = np.argsort(-lam0)
+    picked = []
+    for k in order:
+        if len(picked) >= directions:
+            break
+        if all(abs(int(k) - j) > max(1, lam0.size // 20) for j in picked):
+            picked.append(int(k))
+    for i, k in enumerate(picked):
+        spec, Mp = realise(corner_for(X0[k], k))
+        if spec is not None:
+            keep(spec, Mp, f"lightest along the nominal plant's {'top' if i == 0 else f'#{i + 1}'} direction "
+                           f"of M^-1 G (t = {search.sp.t[k]:.3g} s)")
+    # alternate: the top direction on the current plant, then the corner lightest along it
+    lam, X = lam0, X0
+    best = -np.inf
+    for _ in range(rounds):
+        k = int(np.argmax(lam))
+        spec, Mp = realise(corner_for(X[k], k))
+        if spec is None:
+            break
+        lam, X = keep(spec, Mp, "largest T lambda_max(M_p^-1 G) found (alternating direction and corner)")
+        top = float(np.max(lam))
+        if top <= best * (1 + 1e-9):
+            break
+        best = top
+    out = sorted(found.values(), key=lambda e: -e["T_lambda"])
+    if out:  # the maximiser is named as such whichever route found it
+        out[0] = {**out[0], "why": "largest T lambda_max(M_p^-1 G) found: " + out[0]["why"]}
+    return out
