@@ -184,7 +184,7 @@ class ThetaModel:
         self.n, self.p, self.label = robot.n, robot.p, label
 
     def dM(self, q) -> np.ndarray:
-        """:math:`\partial M(q) / \partial\theta`, (n, n, p): ``dM(q) @ theta`` is M(q; theta)."""
+        r""":math:`\partial M(q) / \partial\theta`, (n, n, p): ``dM(q) @ theta`` is M(q; theta)."""
         n = self.n
         q = np.asarray(q, dtype=float)
         Q = np.broadcast_to(q, (n + 1, n))
