@@ -75,7 +75,7 @@ def _planted(tmp_path):
     box = tmp_path / "planted.toml"
     box.write_text(PLANTED_BOX)
     cfg = design_config({"model": {"theta": "certified", "rho": "certified"}}, robot="rr3", box=str(box),
-                        duration=1.0)
+                        duration=1.0, urdf_uncertainty=0.0)  # the planted box is the whole set
     spec, rho_i = _resolve(cfg, 1000.0)
     sp = spectrum(controller_model(spec), spec.trajectory, 1.0)
     return cfg, spec, sp, fast_design(sp, 1000.0, rho=spec.model["rho"], rho_i=rho_i), Search(

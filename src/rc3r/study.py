@@ -73,7 +73,7 @@ CONFIG_KEYS = {
          "trajectory", "simulation", "tolerance", "design"),
     "payload": ("mass", "com"),
     "design": ("verified", "law", "rate", "margin", "worst_plant", "loop_gain", "note"),
-    "plant": ("spec", "urdf", "box", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
+    "plant": ("spec", "urdf", "box", "urdf_uncertainty", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
               "q0_error", "qd0_error", "noise_seed", "engine"),
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
@@ -187,6 +187,7 @@ class _Bounds:
 
     def __init__(self, nominal, box_path=None, payload=None):
         self.nominal, self.box_path, self.payload = nominal, box_path, payload
+        self.urdf_uncertainty = 0.0  # [plant] urdf_uncertainty: the plants' arm beyond the bounds
         self._box = self._paper = self._cert = self._pay = None
 
     @property
@@ -227,17 +228,33 @@ class _Bounds:
         return self.box.source
 
 
+def _urdf_box(nominal, bounds: _Bounds):
+    """The URDF's own uncertainty of the plants (``[plant] urdf_uncertainty``), or None."""
+    f = getattr(bounds, "urdf_uncertainty", 0.0)
+    if not f:
+        return None
+    from .uncertainty.box import urdf_box
+
+    return urdf_box(nominal, f)
+
+
 def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
     if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
         lock = getattr(nominal, "locked", None)
         plant = type(nominal).from_urdf(spec, lock=lock) if lock else type(nominal).from_urdf(spec)
     elif bounds.payload is not None:
-        plant = _payload_plant(nominal, bounds.payload, spec)
+        plant = _payload_plant(nominal, bounds.payload, spec, _urdf_box(nominal, bounds))
     elif spec == "nominal":
         plant = nominal
     else:
         # random draws are redrawn (same seeded stream) until the robot is physical
-        plant = perturb(nominal, bounds.box, spec, simulable=spec.startswith("random"))
+        ubox = _urdf_box(nominal, bounds)
+        if ubox is not None:  # the plants go beyond the box by the URDF's own error (the model keeps the box)
+            from .uncertainty.box import widened
+
+            plant = perturb(nominal, widened(bounds.box, ubox), spec, simulable=spec.startswith("random"))
+        else:
+            plant = perturb(nominal, bounds.box, spec, simulable=spec.startswith("random"))
     plant.require_simulable()
     return plant
 
@@ -256,13 +273,28 @@ def _bounds_plant(nominal, bf: dict, spec: str):
     return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}")
 
 
-def _payload_plant(nominal, payload, spec: str):
+def _payload_plant(nominal, payload, spec: str, ubox=None):
     """The plant carrying a payload: ``upper`` (default, also for ``nominal``) the heaviest,
-    ``lower`` the lightest, ``random:<seed>`` a seeded uniform mass, ``mass:<kg>`` a given one."""
+    ``lower`` the lightest, ``random:<seed>`` a seeded uniform mass, ``mass:<kg>`` a given one.
+
+    With the URDF's own uncertainty ``ubox`` (a :class:`rc3r.uncertainty.box.Box`, ``[plant]
+    urdf_uncertainty``) ``random:<seed>`` also draws the arm in it (seed ``SeedSequence([seed, 36])``),
+    and ``<payload spec>+corner:<bits>[@s]`` puts the arm at a corner of it (``rc3r design``'s search)."""
     from .uncertainty.payload import with_payload
 
     (lo, hi), com = payload
+    spec, plus, arm = spec.partition("+")
+    if plus and ubox is None:
+        raise ConfigError(f"plant {spec}+{arm!r}: '+' needs [plant] urdf_uncertainty > 0")
     kind, _, arg = spec.partition(":")
+    if ubox is not None:
+        from .uncertainty.box import perturb
+
+        if plus:  # checked with the payload on (_plant): the search realised it so
+            nominal = perturb(nominal, ubox, arm)
+        elif kind == "random" and arg.isdigit():
+            sub = int(np.random.SeedSequence([int(arg), 36]).generate_state(1, np.uint64)[0] >> np.uint64(1))
+            nominal = perturb(nominal, ubox, f"random:{sub}", simulable=True)
     if kind in ("nominal", "upper") and not arg:
         m = hi
     elif kind == "lower" and not arg:
@@ -407,6 +439,14 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     if payload is not None and model_cfg.get("theta") != "plant":
         perturbed = True  # a payload range is unknown to the controller: it gets theta_0 and rho of the range
     box_bounds = _Bounds(nominal, box or cfg.get("box") or plant_cfg.get("box"), payload)
+    try:
+        box_bounds.urdf_uncertainty = float(plant_cfg.get("urdf_uncertainty", 0.0))
+    except (TypeError, ValueError):
+        raise ConfigError(f"[plant] urdf_uncertainty must be a fraction in [0, 1), got "
+                          f"{plant_cfg.get('urdf_uncertainty')!r}") from None
+    if not 0.0 <= box_bounds.urdf_uncertainty < 1.0:
+        raise ConfigError(f"[plant] urdf_uncertainty must be a fraction in [0, 1), got "
+                          f"{box_bounds.urdf_uncertainty!r}")
     spec = plant or plant_cfg.get("spec", "nominal")
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])

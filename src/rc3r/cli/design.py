@@ -38,6 +38,10 @@ def add_parser(sub) -> None:
     d.add_argument("--box", help="box TOML: verified on the nominal robot and --n random plants of the box")
     d.add_argument("--bounds", metavar="FILE", help="bounds.toml of rc3r identify (verified on the nominal robot)")
     d.add_argument("--rate", type=_positive(), required=True, help="controller rate [Hz]")
+    d.add_argument("--urdf-uncertainty", type=_fraction, metavar="FRACTION",
+                   help="the URDF's own error, verified beyond a payload range or a box: every standard parameter "
+                        "of every link FRACTION of its magnitude lighter or heavier (default 0.5; 0: off; "
+                        "never with --bounds)")
     d.add_argument("--config", help="TOML with the trajectory, plant effects, bounds (no gains: they are designed)")
     d.add_argument("--margin", type=_margin, default=2.0,
                    help="the design must also be clean at rate / MARGIN (default 2; 1: at the rate only)")
@@ -50,6 +54,19 @@ def add_parser(sub) -> None:
     d.add_argument("--out", required=True, help="output directory (written as a whole)")
     d.add_argument("--force", action="store_true", help="replace an earlier design in --out")
     plant_args(d)
+
+
+def _fraction(text):
+    import argparse
+    import math
+
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(x) and 0 <= x < 1):
+        raise argparse.ArgumentTypeError(f"must be a fraction in [0, 1), got {text}")
+    return x
 
 
 def _margin(text):
@@ -104,7 +121,7 @@ def cmd_design(args) -> int:
     cfg = design_config(cfg, robot=args.robot, urdf=opts["urdf"], lock=opts["lock"], payload=args.payload,
                         payload_com=args.payload_com, box=args.box, bounds=args.bounds, friction=opts["friction"],
                         torque_limit=opts["torque_limit"], noise=opts["noise"], delay=opts["delay"],
-                        duration=args.duration, tolerance=opts["tolerance"])
+                        duration=args.duration, tolerance=opts["tolerance"], urdf_uncertainty=args.urdf_uncertainty)
     if opts.get("plant_engine"):
         cfg.setdefault("plant", {})["engine"] = opts["plant_engine"]
     first = build_run(controller="robust", config=cfg, rate=args.rate, eps=1.0)  # bad input refused here

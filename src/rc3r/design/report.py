@@ -173,9 +173,16 @@ def design_markdown(result, command: str = "") -> str:
                      + ("(lighter than it: " if w['limit'] > w['T_lambda'] else "(it must be heavier: ")
                      + f"the rule predicted {_f(None if not w.get('model_T_lambda') else w['limit'] / w['model_T_lambda'])} "
                      "x the model's) before the held loop at the rate loses stability.")
+    f = float(result.config.get("plant", {}).get("urdf_uncertainty", 0.0))
+    lines.append(f"* URDF uncertainty: " + (f"+-{f:g} x |value| on every standard parameter of every link, beyond "
+                 "the bounds (which trust the URDF): the random plants draw it, the search visits its corners "
+                 "(docs/design.md, 'URDF uncertainty'; --urdf-uncertainty 0 turns it off)." if f else
+                 "none (the plants are the bounds' own; --urdf-uncertainty F adds it)."))
     if result.search != "off":
-        how = ("corners of the box lightest along the top directions of M_p^-1 G, alternated with the top "
-               "generalized eigenvector" if result.search == "box" else "both ends of the payload range")
+        how = ("both ends of the payload range" if result.search == "payload" else
+               "corners of the box lightest along the top directions of M_p^-1 G, alternated with the top "
+               "generalized eigenvector" + (" (around the payload's lightest end)" if "payload" in result.search
+                                            else ""))
         lines.append(f"* searched: {result.search} ({how}); the hardest plants join the random ones at every eps "
                      "tried: clean means clean on them too.")
     lines += ["", "## The chosen gains (design.toml)", "", "| law | gains |", "|---|---|"]

@@ -39,10 +39,17 @@ from .rule import fast_design, spectrum
 __all__ = ["DesignResult", "controller_model", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
 
 
+#: Default URDF uncertainty of a design whose bounds trust a URDF (docs/design.md, "URDF uncertainty"):
+#: every standard parameter of every link may be this fraction of its magnitude lighter or heavier.
+URDF_UNCERTAINTY = 0.5
+
+
 def design_config(config: dict | None = None, **options) -> dict:
     """The run configuration a design is made for: ``config`` (a ``--config`` table) with the command
     line's ``options`` written into it (``robot``, ``urdf``, ``lock``, ``payload`` (lo, hi), ``payload_com``,
-    ``box``, ``bounds``, ``friction``, ``torque_limit``, ``noise``, ``delay``, ``duration``, ``tolerance``).
+    ``box``, ``bounds``, ``friction``, ``torque_limit``, ``noise``, ``delay``, ``duration``, ``tolerance``,
+    ``urdf_uncertainty``: ``[plant] urdf_uncertainty``, default :data:`URDF_UNCERTAINTY` for bounds that trust
+    the URDF (a payload range, a box), none for an identification's ``bounds``; 0 disables it).
 
     Gains are what a design chooses: a config with ``[gains]`` or ``[controller]`` gains is refused.
     """
@@ -78,6 +85,13 @@ def design_config(config: dict | None = None, **options) -> dict:
     for key in ("friction", "torque_limit", "noise", "delay"):
         if options.get(key) is not None:
             plant[key] = options[key]
+    f = options.get("urdf_uncertainty")
+    if f is None:
+        f = plant.get("urdf_uncertainty", URDF_UNCERTAINTY)
+    if cfg.get("bounds") or float(f) == 0.0:  # identified bounds do not trust the URDF
+        plant.pop("urdf_uncertainty", None)
+    else:
+        plant["urdf_uncertainty"] = float(f)
     if plant:
         cfg["plant"] = plant
     sim = dict(cfg.get("simulation", {}))
@@ -317,17 +331,34 @@ class _Hardest:
 
         self.rate, self.delay = float(rate), int(delay)
         self.search = Search(spec.robot_model, sp, spec.trajectory)
-        self.kind, self.box, self.ends = "off", None, {}
+        self.kind, self.box, self.ends, self.prefix = "off", None, {}, ""
+        f = float(cfg.get("plant", {}).get("urdf_uncertainty", 0.0))
+        ubox = None
+        if f > 0:
+            from ..uncertainty.box import urdf_box
+
+            ubox = urdf_box(spec.robot_model, f)
+        self.urdf_uncertainty = f
         if cfg.get("payload"):
             from ..study import _payload, _payload_plant
 
             pay = _payload(cfg["payload"]["mass"], cfg["payload"].get("com"))
             self.kind = "payload"
             self.ends = {e: _payload_plant(spec.robot_model, pay, e).theta for e in ("lower", "upper")}
+            if ubox is not None:  # the corners of the URDF's uncertainty around the lightest end
+                from ..uncertainty.payload import with_payload
+
+                lower = with_payload(spec.robot_model, pay[0][0], pay[1], label="lower")
+                self.search = Search(lower, sp, spec.trajectory)
+                self.kind, self.box, self.prefix = "payload + URDF uncertainty", ubox, "lower+"
         elif not cfg.get("bounds"):
             from ..study import resolve_box
+            from ..uncertainty.box import widened
 
-            self.kind, self.box = "box", resolve_box(spec.robot_model, cfg.get("box"))
+            box = resolve_box(spec.robot_model, cfg.get("box"))
+            self.kind, self.box = "box", box if ubox is None else widened(box, ubox)
+            if ubox is not None:
+                self.kind = "box + URDF uncertainty"
 
     def gains(self, sliding, **w):
         from .worst import loop_gains
@@ -346,8 +377,12 @@ class _Hardest:
         from .worst import plant_gain, search_box
 
         G = self.gains(sliding, **w)
-        if self.kind == "box":
-            return search_box(self.search, self.box, G, self.rate, delay=self.delay)[:3]
+        if self.box is not None:
+            found = search_box(self.search, self.box, G, self.rate, delay=self.delay)
+            if self.prefix:  # corners of the arm around the payload's lightest end
+                found = [{**e, "spec": "lower" if e["spec"] == "nominal" else self.prefix + e["spec"]}
+                         for e in found]
+            return found[:3]
         out = []
         for end, theta in self.ends.items():
             lam, _ = plant_gain(G, self.search.mass(theta))

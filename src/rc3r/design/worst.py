@@ -111,8 +111,8 @@ def _jacobian(robot, std) -> np.ndarray:
     return J
 
 
-def search_box(search: Search, box, G, rate: float, *, delay: int = 0, directions: int = 3, rounds: int = 6,
-               shrink=(1.0, 0.9, 0.75, 0.5, 0.25, 0.1)) -> list[dict]:
+def search_box(search: Search, box, G, rate: float, *, delay: int = 0, directions: int = 3,
+               rounds: int = 6) -> list[dict]:
     """The hardest plants of a box of standard parameters for the gain G (module docstring).
 
     Returns
@@ -132,27 +132,40 @@ def search_box(search: Search, box, G, rate: float, *, delay: int = 0, direction
     found: dict[str, dict] = {}
 
     products = np.array([str(nm).startswith(("Ixy", "Ixz", "Iyz")) for nm in box.names])
+    bodies = box.size // 10
 
     def realise(bits):
-        """The plant of corner ``bits`` (1 upper, 0 lower, None nominal) made simulable: first the products of
-        inertia left nominal, then the whole delta pulled toward the nominal robot, until it is simulable."""
+        """The plant of corner ``bits`` (1 upper, 0 lower, None nominal) made simulable: the delta of each body
+        that is not (mass <= 0, inertia about its CoM not positive definite) halved until it is (at most 8
+        times), first with every parameter at its corner, then with the products of inertia left nominal."""
+        import re
+
         text = "".join("n" if b is None else "1" if b else "0" for b in bits)
-        tries = [(text, s) for s in shrink[:1]]
+        texts = [text]
         if products.any():
-            fixed = "".join("n" if p else c for c, p in zip(text, products))
-            tries += [(fixed, s) for s in shrink]
-        tries += [(text, s) for s in shrink[1:]]
-        for text, s in tries:
-            spec = f"corner:{text}" + ("" if s == 1.0 else f"@{s:g}")
-            try:
-                plant = perturb(nominal, box, spec)
-            except Exception:  # noqa: BLE001 -- a mass <= 0 at this s: pull further in
-                continue
-            if not _simulable(plant):
-                continue
-            Mp = search.mass(plant.theta)
-            if np.all(np.linalg.eigvalsh(Mp)[:, 0] > 0):
-                return spec, Mp
+            texts.append("".join("n" if p else c for c, p in zip(text, products)))
+        for txt in texts:
+            scales = np.ones(bodies)
+            for _ in range(9):
+                suffix = "" if np.all(scales == 1.0) else "@" + ",".join(f"{x:g}" for x in scales)
+                spec = f"corner:{txt}{suffix}"
+                try:
+                    plant = perturb(nominal, box, spec)
+                    issues = [i for i in plant.physical_issues() if "triangle" not in i]
+                except Exception as exc:  # noqa: BLE001 -- a mass <= 0: the message names no body
+                    plant, issues = None, [str(exc)]
+                if not issues:
+                    Mp = search.mass(plant.theta)
+                    if np.all(np.linalg.eigvalsh(Mp)[:, 0] > 0):
+                        return spec, Mp
+                    scales = scales * 0.5
+                    continue
+                bad = {int(m) - 1 for i in issues for m in re.findall(r"(?:body|link) (\d+)", i)}
+                bad = {b for b in bad if 0 <= b < bodies}
+                if bad:
+                    scales[sorted(bad)] *= 0.5
+                else:
+                    scales = scales * 0.5
         return None, None
 
     def corner_for(x, k):
@@ -222,6 +235,6 @@ def search_box(search: Search, box, G, rate: float, *, delay: int = 0, direction
             break
         best = top
     out = sorted(found.values(), key=lambda e: -e["T_lambda"])
-    if out:  # the maximiser is named as such whichever route found it
+    if out and not out[0]["why"].startswith("largest"):  # the maximiser is named as such whichever route found it
         out[0] = {**out[0], "why": "largest T lambda_max(M_p^-1 G) found: " + out[0]["why"]}
     return out
