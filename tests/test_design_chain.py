@@ -200,3 +200,57 @@ def test_every_command_names_an_unverified_design(failed_design, tmp_path, capsy
     info = json.loads((tmp_path / "x" / "export.json").read_text())
     assert info["verified"] is False
     assert "did NOT verify" in (Path(tmp_path / "x") / "check.c").read_text()
+
+
+# ---- the URDF's own uncertainty ----------------------------------------------------------------------
+
+def test_bounds_that_trust_a_urdf_are_verified_beyond_it_by_default():
+    """A payload range or a box gets [plant] urdf_uncertainty = 0.5 by default (0 turns it off); an
+    identification's bounds never do (they do not trust the URDF). Fails if the default is dropped."""
+    from rc3r.design.verify import URDF_UNCERTAINTY, design_config
+
+    assert URDF_UNCERTAINTY == 0.5
+    assert design_config({}, robot="ur5", payload=(0, 3))["plant"]["urdf_uncertainty"] == 0.5
+    assert design_config({}, robot="rr3")["plant"]["urdf_uncertainty"] == 0.5
+    assert "urdf_uncertainty" not in design_config({}, robot="ur5", payload=(0, 3),
+                                                   urdf_uncertainty=0.0).get("plant", {})
+    assert "urdf_uncertainty" not in design_config({}, robot="ur5", bounds=__file__).get("plant", {})
+
+
+def test_payload_plants_with_urdf_uncertainty_stay_in_its_box_and_the_search_goes_past_the_light_end():
+    """With urdf_uncertainty 0.5 on the UR5 + 0..3 kg: a random plant's arm (payload removed) lies in
+    +-0.5 |std| of the URDF and differs from it; the same spec without it is the URDF arm exactly; the
+    searched corner around the light end ('lower+corner:...') is simulable, harder than the light end
+    itself, and its figure is exact on the plant build_run makes of its spec."""
+    from rc3r.design.rule import fast_design, spectrum
+    from rc3r.design.verify import _Hardest, _resolve, controller_model, design_config
+    from rc3r.design.worst import plant_gain
+    from rc3r.uncertainty.payload import payload_parameters
+
+    cfg = design_config({}, robot="ur5", payload=(0.0, 3.0), duration=1.0)
+    spec, rho_i = _resolve(cfg, 1000.0)
+    urdf = spec.robot_model.standard_parameters()
+    for f in (0.5, 0.0):
+        c = json.loads(json.dumps(cfg))
+        c["plant"]["urdf_uncertainty"] = f
+        p = rc3r.build_run(controller="robust", config=c, plant="random:5", rate=1000.0, eps=1.0).plant
+        mass = float(np.random.default_rng(5).uniform(0.0, 3.0))
+        arm = p.standard_parameters().copy()
+        arm[-10:] -= payload_parameters(mass, np.zeros(3), None)
+        if f:
+            assert np.all(np.abs(arm - urdf) <= f * np.abs(urdf) + 1e-9) and np.max(np.abs(arm - urdf)) > 1e-3
+        else:
+            np.testing.assert_allclose(arm, urdf, atol=1e-9)
+    sp = spectrum(controller_model(spec), spec.trajectory, 1.0)
+    d = fast_design(sp, 1000.0, rho=spec.model["rho"], rho_i=rho_i)
+    hard = _Hardest(cfg, spec, sp, 1000.0, 0)
+    sl = {k: v for k, v in d.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
+    found = hard.plants(sl, rho=spec.model["rho"], eps=d.eps)
+    top = found[0]
+    assert top["spec"].startswith("lower+corner:")
+    G = hard.gains(sl, rho=spec.model["rho"], eps=d.eps)
+    light = rc3r.build_run(controller="robust", config=cfg, plant="lower", rate=1000.0, eps=1.0).plant
+    plant = rc3r.build_run(controller="robust", config=cfg, plant=top["spec"], rate=1000.0, eps=1.0).plant
+    gain = float(np.max(plant_gain(G, hard.search.mass(plant.theta))[0])) / 1000.0
+    assert gain == pytest.approx(top["T_lambda"], rel=1e-6)
+    assert gain > 1.05 * float(np.max(plant_gain(G, hard.search.mass(light.theta))[0])) / 1000.0
