@@ -179,13 +179,21 @@ def test_a_failed_design_says_why_and_what_to_try(failed_design, capsys):
 
 def test_every_command_names_an_unverified_design(failed_design, tmp_path, capsys):
     """rc3r run and montecarlo warn in one stderr line; export refuses it (exit 2) and with --force exports it
-    marked unverified (export.json, make check's line)."""
+    marked unverified (export.json, make check's line); each runs design.toml's [controller] kind (montecarlo
+    beside FBL) unless told otherwise."""
     _, out = failed_design
     cfg = str(out / "design.toml")
     capsys.readouterr()
     main(["run", "--config", cfg, "--duration", "0.1", "--out", str(tmp_path / "run")])
     err = capsys.readouterr().err
     assert sum("did NOT verify" in line for line in err.splitlines()) == 1
+    kind = rc3r.io.read_toml(cfg, "d")["controller"]["kind"]
+    assert json.loads((tmp_path / "run" / "metrics.json").read_text())["controller"] == kind
+    alt = tmp_path / "alt.toml"  # [controller] kind is what runs (not the default robust)
+    alt.write_text(Path(cfg).read_text().replace(f'kind = "{kind}"', 'kind = "robust-coeff"'))
+    main(["run", "--config", str(alt), "--duration", "0.1", "--out", str(tmp_path / "run2")])
+    assert json.loads((tmp_path / "run2" / "metrics.json").read_text())["controller"] == "robust-coeff"
+    capsys.readouterr()
     main(["montecarlo", "--config", cfg, "--n", "1", "--duration", "0.1", "--workers", "1",
           "--out", str(tmp_path / "mc")])
     cap = capsys.readouterr()
@@ -198,7 +206,9 @@ def test_every_command_names_an_unverified_design(failed_design, tmp_path, capsy
     assert not (tmp_path / "x").exists()
     assert main(["export", "--config", cfg, "--states", "20", "--force", "--out", str(tmp_path / "x")]) == 0
     info = json.loads((tmp_path / "x" / "export.json").read_text())
-    assert info["verified"] is False
+    assert info["verified"] is False and info["law"]["name"] == kind
+    assert main(["export", "--config", str(alt), "--states", "20", "--force", "--out", str(tmp_path / "y")]) == 0
+    assert json.loads((tmp_path / "y" / "export.json").read_text())["law"]["name"] == "robust-coeff"
     assert "did NOT verify" in (Path(tmp_path / "x") / "check.c").read_text()
 
 
