@@ -57,12 +57,13 @@ def failure_line(result) -> str:
         last = max(lv, key=lambda x: x["eps"])
         dec = last.get("decided_by") or {}
         parts.append(f"eq. 6 at its largest eps tried {last['eps']:.4g}: {_verdicts(last['at_rate'])} at "
-                     f"{result.rate:g} Hz" + (f", decided by plant {dec['plant']} ({dec['verdict']})" if dec else ""))
+                     f"{result.rate:g} Hz" + (f", decided by plant {dec['plant']} ({dec['verdict']} at "
+                                              f"{dec['rate']:g} Hz)" if dec else ""))
     rc = result.baselines.get("robust-coeff")
     if rc:
-        parts.append(f"eq. 7 at eps_i {rc.get('eps_i', float('nan')):.4g}: {_verdicts(rc)}"
-                     + (f", decided by plant {rc['decided_by']['plant']} ({rc['decided_by']['verdict']})"
-                        if rc.get("decided_by") else ""))
+        dec = rc.get("decided_by")
+        parts.append(f"eq. 7 at eps_i {rc.get('eps_i', float('nan')):.4g}: {_verdicts(rc)} at {result.rate:g} Hz"
+                     + (f", decided by plant {dec['plant']} ({dec['verdict']} at {dec['rate']:g} Hz)" if dec else ""))
     return "; ".join(parts) or "no robust law was clean on every plant"
 
 
@@ -78,6 +79,13 @@ def next_steps(result) -> list[str]:
     counts.pop("clean", None)
     out = []
     w = result.worst.get("robust") or result.worst.get("robust-coeff")
+    limits = []
+    if counts.get("limit-violated"):
+        limits.append(f"plants left the joint limits ({counts['limit-violated']} runs): a smaller or slower reference "
+                      "([trajectory] in --config) or a smaller payload range")
+    if counts.get("limit-violated", 0) >= counts.get("chattering", 0) + counts.get("diverged", 0):
+        out += limits  # the most common failure first
+        limits = []
     if counts.get("chattering") or counts.get("diverged"):
         if w and w["T_lambda"] > w["limit"]:
             need = result.rate * w["T_lambda"] / w["limit"]
@@ -85,10 +93,9 @@ def next_steps(result) -> list[str]:
                        f"> {w['limit']:.3g} at {result.rate:g} Hz, so about {need:.3g} Hz for the same gains")
         else:
             out.append("a higher --rate (the held loop chattered or diverged)")
-        out.append("a larger eps (rc3r run --eps on the deciding plant; --steps lets the search double further)")
-    if counts.get("limit-violated"):
-        out.append("plants left the joint limits: a smaller or slower reference ([trajectory] in --config) "
-                   "or a smaller payload range")
+        out.append(f"a larger eps ({counts.get('chattering', 0)} runs chattered, {counts.get('diverged', 0)} "
+                   "diverged; try it on the deciding plant: rc3r run --config design.toml --plant SPEC --eps E)")
+    out += limits
     if counts.get("saturated"):
         out.append("torques reached the limits: a smaller payload range, or the arm's real torque limits")
     out.append("a smaller bounds set (payload range, box) if the real arm is known better; --margin 1 verifies "
