@@ -264,3 +264,40 @@ def test_payload_plants_with_urdf_uncertainty_stay_in_its_box_and_the_search_goe
     gain = float(np.max(plant_gain(G, hard.search.mass(plant.theta))[0])) / 1000.0
     assert gain == pytest.approx(top["T_lambda"], rel=1e-6)
     assert gain > 1.05 * float(np.max(plant_gain(G, hard.search.mass(light.theta))[0])) / 1000.0
+
+
+def test_ellipsoid_search_finds_its_lightest_points_and_beats_random_draws():
+    """An identified-style ellipsoid around the 3R's theta (10 % half-widths, as the ellipsoid module's
+    example): the search's hardest plant lies in the ellipsoid (realised by draw_from_ellipsoid from its
+    spec), and its T lambda_max(M_p^-1 G) is at least that of 40 seeded random draws in it; for a fixed
+    direction the closed form is the minimiser (no boundary draw is lighter along it)."""
+    from rc3r.design.rule import ThetaModel, fast_design, spectrum
+    from rc3r.design.worst import Search, loop_gains, plant_gain, search_ellipsoid
+    from rc3r.uncertainty.ellipsoid import draw_from_ellipsoid, lightest_theta
+
+    arm = rc3r.load_robot("rr3")
+    th0 = arm.theta
+    P = np.diag(1.0 / (0.10 * np.abs(th0) + 1e-3) ** 2)
+    traj = arm.default_trajectory()
+    sp = spectrum(ThetaModel(arm, th0), traj, 2.0)
+    d = fast_design(sp, 1000.0, rho=float(np.sqrt(1.0 / np.min(np.diag(P)))))
+    S = Search(arm, sp, traj)
+    G = loop_gains(S, d.gains("robust"), rho=d.rho, eps=d.eps)
+
+    def realise(spec):
+        return draw_from_ellipsoid(arm, th0, P, spec)
+
+    pool = [(f"boundary:{k}", S.mass(realise(f"boundary:{k}").theta)) for k in range(24)]
+    top = search_ellipsoid(S, realise, G, 1000.0, pool=pool)[0]
+    plant = realise(top["spec"])
+    dth = plant.theta - th0
+    assert dth @ P @ dth <= 1.0 + 1e-6
+    rand = [float(np.max(plant_gain(G, S.mass(realise(f"random:{k}").theta))[0])) / 1000.0 for k in range(40)]
+    assert top["T_lambda"] >= max(rand) and top["spec"] != "centre"
+    k = 7
+    x = np.linalg.eigh(S.M0[k])[1][:, 0]
+    arg = ",".join(repr(float(v)) for v in S.q[k]) + ":" + ",".join(repr(float(v)) for v in x)
+    best = x @ S.mass(lightest_theta(arm, th0, P, arg))[k] @ x
+    for j in range(40):
+        other = draw_from_ellipsoid(arm, th0, P, f"boundary:{j}").theta
+        assert best <= x @ S.mass(other)[k] @ x + 1e-12

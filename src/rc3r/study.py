@@ -262,7 +262,7 @@ def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
 def _drawn(spec) -> bool:
     """True for a plant spec drawn from an ellipsoid of bounds (``centre``, ``random:``, ``boundary:``)."""
     kind = str(spec).strip().partition(":")[0].lower()
-    return kind in ("centre", "center", "random", "boundary")
+    return kind in ("centre", "center", "random", "boundary", "lightest")
 
 
 def _bounds_plant(nominal, bf: dict, spec: str):

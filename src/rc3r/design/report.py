@@ -168,8 +168,7 @@ def design_markdown(result, command: str = "") -> str:
                         f"{', searched' if dec['searched'] else ''})") + " |")
     lines += ["", "## Hardest plants (worst-plant search)", ""]
     if result.search == "off" or not result.worst:
-        lines.append("* not searched" + (" (an identified ellipsoid: its centre and draws only)"
-                                         if result.config.get("bounds") else "") + ".")
+        lines.append("* not searched.")
     for law, w in result.worst.items():
         gain = f"eps = {w['eps']:.4g}" if "eps" in w else f"eps_i = {w['eps_i']:.4g}"
         lines.append(f"* {law} ({gain}) at {result.rate:g} Hz: hardest plant `{w['spec']}` ({w['why']}): "
@@ -187,6 +186,8 @@ def design_markdown(result, command: str = "") -> str:
                  "none (the plants are the bounds' own; --urdf-uncertainty F adds it)."))
     if result.search != "off":
         how = ("both ends of the payload range" if result.search == "payload" else
+               "the ellipsoid's points of least inertia along the top directions of M_p^-1 G (closed form), "
+               "alternated with the top generalized eigenvector" if result.search == "ellipsoid" else
                "corners of the box lightest along the top directions of M_p^-1 G, alternated with the top "
                "generalized eigenvector" + (" (around the payload's lightest end)" if "payload" in result.search
                                             else ""))

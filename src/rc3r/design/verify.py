@@ -39,6 +39,9 @@ from .rule import fast_design, spectrum
 __all__ = ["DesignResult", "controller_model", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
 
 
+#: Seeded boundary draws (``boundary:0`` ...) the ellipsoid's search keeps beside its closed-form points.
+BOUNDARY_DRAWS = 24
+
 #: Default URDF uncertainty of a design whose bounds trust a URDF (docs/design.md, "URDF uncertainty"):
 #: every standard parameter of every link may be this fraction of its magnitude lighter or heavier.
 URDF_UNCERTAINTY = 0.5
@@ -323,8 +326,9 @@ def deciding(rows: list[dict], searched=()) -> dict | None:
 
 class _Hardest:
     """The worst-plant search of a design (:mod:`rc3r.design.worst`) on its bounds: a box of standard
-    parameters (searched corner by corner), a payload range (its two ends, exact), an identified ellipsoid
-    (not searched: its centre and draws only)."""
+    parameters (searched corner by corner), a payload range (its two ends, exact; with the URDF's uncertainty
+    the corners of its box around the lighter end), an identified ellipsoid (its lightest points along the
+    worst directions, closed form)."""
 
     def __init__(self, cfg, spec, sp, rate, delay):
         from .worst import Search
@@ -351,7 +355,17 @@ class _Hardest:
                 lower = with_payload(spec.robot_model, pay[0][0], pay[1], label="lower")
                 self.search = Search(lower, sp, spec.trajectory)
                 self.kind, self.box, self.prefix = "payload + URDF uncertainty", ubox, "lower+"
-        elif not cfg.get("bounds"):
+        elif cfg.get("bounds"):  # the identified ellipsoid: its lightest points along the worst directions
+            from ..identify.bounds_file import load_bounds
+            from ..uncertainty.ellipsoid import draw_from_ellipsoid
+
+            bf = load_bounds(cfg["bounds"], robot=spec.robot_model)
+            self.kind = "ellipsoid"
+            self.realise = lambda s: draw_from_ellipsoid(spec.robot_model, bf["theta0"], bf["P"], s,
+                                                         source=f"bounds file {bf['source']}")
+            self.pool = [(f"boundary:{k}", self.search.mass(self.realise(f"boundary:{k}").theta))
+                         for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
+        else:
             from ..study import resolve_box
             from ..uncertainty.box import widened
 
@@ -377,6 +391,10 @@ class _Hardest:
         from .worst import plant_gain, search_box
 
         G = self.gains(sliding, **w)
+        if self.kind == "ellipsoid":
+            from .worst import search_ellipsoid
+
+            return search_ellipsoid(self.search, self.realise, G, self.rate, delay=self.delay, pool=self.pool)[:3]
         if self.box is not None:
             found = search_box(self.search, self.box, G, self.rate, delay=self.delay)
             if self.prefix:  # corners of the arm around the payload's lightest end

@@ -26,7 +26,7 @@ import numpy as np
 
 from .rule import ThetaModel, stability_limit
 
-__all__ = ["loop_gains", "plant_gain", "search_box", "Search"]
+__all__ = ["loop_gains", "plant_gain", "search_box", "search_ellipsoid", "Search"]
 
 
 class Search:
@@ -238,3 +238,77 @@ def search_box(search: Search, box, G, rate: float, *, delay: int = 0, direction
     if out and not out[0]["why"].startswith("largest"):  # the maximiser is named as such whichever route found it
         out[0] = {**out[0], "why": "largest T lambda_max(M_p^-1 G) found: " + out[0]["why"]}
     return out
+
+
+def search_ellipsoid(search: Search, realise, G, rate: float, *, delay: int = 0, directions: int = 3,
+                     rounds: int = 4, shrink=(1.0, 0.75, 0.5, 0.35, 0.25, 0.15, 0.1), pool=()) -> list[dict]:
+    """The hardest plants of an identified ellipsoid for the gain G (module docstring): over the ellipsoid
+    :math:`x^T M(q;\\theta) x` is smallest at :math:`\\theta_0 - P^{-1}g/\\sqrt{g^T P^{-1} g}`
+    (``lightest:<q>:<x>``, :func:`rc3r.uncertainty.ellipsoid.lightest_theta`); alternated with the top
+    generalized eigenvector of (G, M_p) like :func:`search_box`.
+
+    ``realise(spec)`` builds the plant of a spec (the centre: ``"centre"``) or raises; a point no simulable
+    robot realises is moved toward theta_0 (``:<s>``, s in ``shrink``). ``pool``: ``(spec, M_p (N, n, n))`` of
+    plants already realised on the ellipsoid's boundary (seeded ``boundary:<seed>`` draws, each realisable:
+    where the closed form is not, the hardest of them stands in). Returns what :func:`search_box` does.
+    """
+    T = 1.0 / float(rate)
+    limit = stability_limit(delay)
+    found: dict[str, dict] = {}
+
+    def fmt(v):
+        return ",".join(f"{float(a):.12g}" for a in v)
+
+    def keep(spec, plant, why):
+        lam, X = plant_gain(G, search.mass(plant.theta))
+        k = int(np.argmax(lam))
+        found[spec] = {"spec": spec, "T_lambda": float(T * lam[k]), "t": float(search.sp.t[k]),
+                       "limit": float(limit), "why": why}
+        return lam, X
+
+    def lightest(x, k, why):
+        for s in shrink:
+            spec = f"lightest:{fmt(search.q[k])}:{fmt(x)}" + ("" if s == 1.0 else f":{s:g}")
+            try:
+                plant = realise(spec)
+            except Exception:  # noqa: BLE001 -- not realisable there: closer to theta_0
+                continue
+            return keep(spec, plant, why)
+        return None
+
+    for spec, Mp in pool:
+        lam, _ = plant_gain(G, Mp)
+        k = int(np.argmax(lam))
+        found[spec] = {"spec": spec, "T_lambda": float(T * lam[k]), "t": float(search.sp.t[k]),
+                       "limit": float(limit), "why": "the hardest of the seeded boundary draws"}
+    if pool:  # only the hardest draw stays
+        top = max((found[s] for s, _ in pool), key=lambda e: e["T_lambda"])
+        for spec, _ in pool:
+            if spec != top["spec"]:
+                found.pop(spec)
+    lam0, X0 = keep("centre", realise("centre"), "the centre theta_0 (where the search starts)")
+    picked = []
+    for k in np.argsort(-lam0):
+        if len(picked) >= directions:
+            break
+        if all(abs(int(k) - j) > max(1, lam0.size // 20) for j in picked):
+            picked.append(int(k))
+    for i, k in enumerate(picked):
+        lightest(X0[k], k, f"lightest along the centre's {'top' if i == 0 else f'#{i + 1}'} direction of M^-1 G "
+                           f"(t = {search.sp.t[k]:.3g} s)")
+    lam, X = lam0, X0
+    best = -np.inf
+    for _ in range(rounds):
+        k = int(np.argmax(lam))
+        got = lightest(X[k], k, "largest T lambda_max(M_p^-1 G) found (alternating direction and lightest point)")
+        if got is None:
+            break
+        lam, X = got
+        if float(np.max(lam)) <= best * (1 + 1e-9):
+            break
+        best = float(np.max(lam))
+    out = sorted(found.values(), key=lambda e: -e["T_lambda"])
+    if out and not out[0]["why"].startswith("largest"):
+        out[0] = {**out[0], "why": "largest T lambda_max(M_p^-1 G) found: " + out[0]["why"]}
+    return out
+
