@@ -3,12 +3,16 @@ r"""The rule's fast form verified by simulation over the bounds, at the rate and
 :func:`verify_design` takes a run configuration (the arm, its bounds, the plant effects, the
 trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
 
-1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's model;
+1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's own model (theta_0's M,
+   :func:`controller_model`);
 2. runs the robust law with it on the plants of the bounds -- for a payload the lightest and the
    heaviest end and ``n`` seeded random masses, for a box its nominal robot and ``n`` seeded random
    plants (``random:<plant_seed(seed, k)>``, as ``rc3r montecarlo``), for an identification's
    bounds the ellipsoid's centre and ``n`` seeded plants drawn in it
-   (:func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`) -- at the rate and at rate / margin, as campaign jobs
+   (:func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`) -- and, for every eps tried, the three hardest
+   plants of the bounds for that eps (:mod:`rc3r.design.worst`, searched in this process: linear algebra, no
+   draw), beyond the bounds by the URDF's own uncertainty when they trust the URDF (``[plant]
+   urdf_uncertainty``) -- at the rate and at rate / margin, as campaign jobs
    (:func:`rc3r.campaign.runner.run_many`: a local pool or a Dask scheduler);
 3. starts from the fast form's eps for rate / margin (:func:`start_eps`), tightens eps by halves
    while every run is ``clean``, or backs off by doubling while one chatters, saturates, leaves the
