@@ -1,10 +1,12 @@
 """``rc3r design``: gains and eps for a controller rate, verified over the bounds (docs/design.md).
 
 Writes into ``--out`` (as a whole, :mod:`rc3r.cli._output`): ``design.toml`` (a configuration for
-``rc3r run --config`` and ``rc3r montecarlo --config``), ``design.md``, ``design.json``,
-``design.png`` and ``runs.csv`` (every verification run, the rows of ``rc3r montecarlo``).
-Exit 0 when a robust law (eq. 6 or eq. 7) was clean at the rate and at rate / margin on every plant, 1 when none was
-(the files are written with the fast form's gains and say so), 2 on bad input (nothing written).
+``rc3r run``, ``montecarlo`` and ``export --config``: ``[controller] kind`` the recommended law, ``[gains.<law>]``
+every law's gains, ``[design] verified``), ``design.md``, ``design.json``, ``design.png`` and ``runs.csv``
+(every verification run, the rows of ``rc3r montecarlo``).
+Exit 0 when a robust law (eq. 6 or eq. 7) was clean at the rate and at rate / margin on every plant (the random
+ones and the searched hardest ones), 1 when none was (the files are written with the fast form's gains,
+``verified = false``, and the command says why and what to try), 2 on bad input (nothing written).
 """
 from __future__ import annotations
 
