@@ -178,7 +178,8 @@ def design_markdown(result, command: str = "") -> str:
                      f"{w['limit'] / w['T_lambda']:.3g} x the hardest plant's inertia "
                      + ("(lighter than it: " if w['limit'] > w['T_lambda'] else "(it must be heavier: ")
                      + f"the rule predicted {_f(None if not w.get('model_T_lambda') else w['limit'] / w['model_T_lambda'])} "
-                     "x the model's) before the held loop at the rate loses stability.")
+                     "x the model's) before the held loop at the rate loses stability."
+                     + _not_clean(result, law, w))
     f = float(result.config.get("plant", {}).get("urdf_uncertainty", 0.0))
     lines.append(f"* URDF uncertainty: " + (f"+-{f:g} x |value| on every standard parameter of every link, beyond "
                  "the bounds (which trust the URDF): the random plants draw it, the search visits its corners "
@@ -237,6 +238,20 @@ def design_markdown(result, command: str = "") -> str:
               + (f" (below {result.rate / result.margin:g} Hz on the first four plants: {tried})" if tried else ""),
               "", "Figure: design.png (worst error and chattering against eps at the rate). Runs: runs.csv.", ""]
     return "\n".join(lines)
+
+
+def _not_clean(result, law: str, w: dict) -> str:
+    """What design.md adds to a law that is not clean over the whole set at the rate: what would make it so."""
+    rc = result.baselines.get("robust-coeff") or {}
+    clean = result.eq6_ok if law == "robust" else bool(rc.get("clean") and rc.get("clean_low", True))
+    if clean:
+        return ""
+    text = f" **{law} is not clean over the whole set at {result.rate:g} Hz**"
+    if w["T_lambda"] >= w["limit"]:
+        return text + (f": its held loop on this plant needs about {result.rate * w['T_lambda'] / w['limit']:.3g} Hz "
+                       f"with these gains, or a boundary layer about {w['T_lambda'] / w['limit']:.3g} x thicker.")
+    return text + ": its loop on the hardest plant is stable, so the failing runs are not the held loop's: see " \
+                  "'decided by' and 'Not verified: what to try'."
 
 
 def _short(spec: str) -> str:
