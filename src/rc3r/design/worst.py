@@ -58,7 +58,24 @@ class Search:
 
 
 def loop_gains(search: Search, gains: dict, *, rho=None, eps=None, rho_i=None, eps_i=None) -> np.ndarray:
-    """G(t) of a sliding law along the reference, (N, n, n): ``K + K_inertia M0 + Y W Y^T``."""
+    """G(t) of a sliding law along the reference: ``K + K_inertia M0 + Y W Y^T``.
+
+    Parameters
+    ----------
+    search : Search
+        The reference samples (regressors, the controller's M0).
+    gains : dict
+        The law's ``K`` (scalar, (n,) or (n, n)) and ``K_inertia`` (b of the scheduled ``b M0(q)``).
+    rho, eps : float, optional
+        Eq. 6: ``W = (rho / eps) I``.
+    rho_i, eps_i : (p,) or float, optional
+        Eq. 7: ``W = diag(rho_i / eps_i)`` (used when ``eps_i`` is given).
+
+    Returns
+    -------
+    ndarray, (N, n, n)
+        Symmetric G at every sample.
+    """
     sp = search.sp
     n = sp.n
     K = np.asarray(gains.get("K", 0.0), dtype=float)
@@ -73,7 +90,20 @@ def loop_gains(search: Search, gains: dict, *, rho=None, eps=None, rho_i=None, e
 
 
 def plant_gain(G, Mp):
-    """``(lambda_max(M_p^-1 G) per sample (N,), top generalized eigenvectors (N, n))``; inf where M_p is not PD."""
+    r"""The held loop's top mode on a plant, sample by sample.
+
+    Parameters
+    ----------
+    G, Mp : ndarray, (N, n, n)
+        The law's gain and the plant's mass matrix along the reference.
+
+    Returns
+    -------
+    lam : ndarray, (N,)
+        :math:`\lambda_{\max}(M_p^{-1} G)` (inf where M_p is not positive definite).
+    X : ndarray, (N, n)
+        The top generalized eigenvectors of (G, M_p) (zero where M_p is not positive definite).
+    """
     N, n, _ = G.shape
     lam = np.full(N, np.inf)
     X = np.zeros((N, n))
@@ -114,6 +144,23 @@ def _jacobian(robot, std) -> np.ndarray:
 def search_box(search: Search, box, G, rate: float, *, delay: int = 0, directions: int = 3,
                rounds: int = 6) -> list[dict]:
     """The hardest plants of a box of standard parameters for the gain G (module docstring).
+
+    Parameters
+    ----------
+    search : Search
+        The reference samples; ``search.nominal`` is the robot the box's deltas are added to.
+    box : rc3r.uncertainty.box.Box
+        The deltas of the standard parameters.
+    G : ndarray, (N, n, n)
+        The law's gain along the reference (:func:`loop_gains`).
+    rate : float
+        Controller rate [Hz].
+    delay : int
+        Samples of delay (the limit is :func:`rc3r.design.rule.stability_limit`).
+    directions : int
+        Top directions of the nominal plant whose lightest corners are kept.
+    rounds : int
+        At most this many alternations of direction and corner.
 
     Returns
     -------
