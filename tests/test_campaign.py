@@ -144,9 +144,13 @@ def test_montecarlo_writes_table_summary_and_figures(tmp_path):
     md = {line.split("|")[1].strip(): [c.strip() for c in line.split("|")[2:-1]]
           for line in (out / "summary.md").read_text().splitlines()[2:]}
     for c, s in summary.items():
-        assert md[c][:5] == [str(s["runs"]), str(s["diverged"]), f"{s['max_error_median']:.3g}",
+        v = s["verdicts"]  # every verdict counted (issue 36), and they add up to the runs
+        assert sum(v.values()) == s["runs"] and v == {k: sum(r["verdict"] == k for r in rows if r["controller"] == c)
+                                                      for k in v}
+        assert md[c][:9] == [str(s["runs"]), str(v["clean"]), str(v["chattering"]), str(v["saturated"]),
+                             str(v["limit-violated"]), str(v["diverged"]), f"{s['max_error_median']:.3g}",
                              f"{s['max_error_p95']:.3g}", f"{s['max_error_max']:.3g}"]
-    assert md["robust"][6] == f"{summary['robust']['bound_exceeded']} of {summary['robust']['bound_checked']}"
+    assert md["robust"][10] == f"{summary['robust']['bound_exceeded']} of {summary['robust']['bound_checked']}"
     # the figures are PNGs of the size the code asks for (8 x 4.8 in at 100 dpi)
     for name in ("error_cdf.png", "error_vs_distance.png"):
         assert imread(out / name).shape[:2] == (480, 800)

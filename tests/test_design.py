@@ -205,8 +205,9 @@ def ur5_design(tmp_path_factory):
 
 
 def test_small_design_on_the_ur5_is_clean_everywhere_it_was_verified(ur5_design):
-    """Exit 0; the chosen eps is the smallest clean one tried, and every run of it (both payload ends, at 1 kHz
-    and at 500 Hz) is clean in runs.csv (read back independently); a smaller eps tried was not clean."""
+    """Exit 0; the chosen eps is the smallest clean one tried, and every run of it (both payload ends and the
+    searched hardest plants, at 1 kHz and at 500 Hz) is clean in runs.csv (read back independently); a
+    smaller eps tried was not clean."""
     from rc3r.campaign import read_rows
 
     code, out = ur5_design
@@ -216,7 +217,9 @@ def test_small_design_on_the_ur5_is_clean_everywhere_it_was_verified(ur5_design)
     rows = read_rows(out / "runs.csv")
     chosen = [r for r in rows if r["controller"] == "robust" and r["eps"] == eps
               and r["rate_hz"] in (1000.0, 500.0)]
-    assert len(chosen) == 4 and all(r["verdict"] == "clean" for r in chosen)
+    level = next(lv for lv in info["levels"] if lv["eps"] == eps)  # the two ends and the searched hardest plants
+    assert level["plants"] > 2 and len(chosen) == 2 * level["plants"]
+    assert all(r["verdict"] == "clean" for r in chosen)
     tried = sorted({r["eps"] for r in rows if r["controller"] == "robust" and r["rate_hz"] in (1000.0, 500.0)})
     assert tried[0] < eps  # the search went below and found the boundary
     smaller = [e for e in tried if e < eps]

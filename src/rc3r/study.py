@@ -39,7 +39,7 @@ from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
 from .uncertainty import certified_bounds, certified_radius, load_box, paper_bounds, perturb
 
-__all__ = ["RunSpec", "build_run", "execute", "resolve_box", "CONFIG_KEYS"]
+__all__ = ["RunSpec", "build_run", "design_warning", "execute", "resolve_box", "CONFIG_KEYS"]
 
 
 @dataclass(frozen=True)
@@ -70,9 +70,10 @@ class RunSpec:
 #: Keys a run configuration may hold, per table (docs/control.md).
 CONFIG_KEYS = {
     "": ("robot", "urdf", "lock", "bounds", "seed", "perturbed", "box", "payload", "plant", "model", "controller", "gains",
-         "trajectory", "simulation", "tolerance"),
+         "trajectory", "simulation", "tolerance", "design"),
     "payload": ("mass", "com"),
-    "plant": ("spec", "urdf", "box", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
+    "design": ("verified", "law", "rate", "margin", "worst_plant", "loop_gain", "note"),
+    "plant": ("spec", "urdf", "box", "urdf_uncertainty", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
               "q0_error", "qd0_error", "noise_seed", "engine"),
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
@@ -95,9 +96,27 @@ def _check_keys(table, allowed, where: str) -> dict:
     return table
 
 
+def design_warning(cfg: dict | None) -> str | None:
+    """One line for a configuration written by ``rc3r design`` whose design did not verify
+    (``[design] verified = false``), else None. ``rc3r run``, ``montecarlo`` and ``export`` print it."""
+    note = design_unverified(cfg)
+    if note is None:
+        return None
+    return (f"rc3r: warning: this design.toml did NOT verify ({note}); its gains are unverified: "
+            "see its design.md and docs/design.md, 'When the design is not clean'")
+
+
+def design_unverified(cfg: dict | None) -> str | None:
+    """Why a configuration written by ``rc3r design`` is not verified (its ``[design] note``), or None."""
+    d = (cfg or {}).get("design")
+    if not isinstance(d, dict) or d.get("verified", True) is not False:
+        return None
+    return str(d.get("note") or "no robust law was clean on every plant")
+
+
 def _check_config(cfg: dict, kind_override=None) -> None:
     _check_keys(cfg, CONFIG_KEYS[""], "")
-    for table in ("plant", "model", "trajectory", "simulation", "payload"):
+    for table in ("plant", "model", "trajectory", "simulation", "payload", "design"):
         if table in cfg:
             _check_keys(cfg[table], CONFIG_KEYS[table], table)
     if "controller" in cfg:
@@ -118,6 +137,8 @@ def _check_config(cfg: dict, kind_override=None) -> None:
     for law, table in gains.items():
         names = [f for f in LAWS[law].__dataclass_fields__ if f not in ("theta", "rho", "rho_i")]
         _check_keys(table, names + (["eps"] if "eps_i" in names else []), f"gains.{law}")
+    if "verified" in cfg.get("design", {}) and not isinstance(cfg["design"]["verified"], bool):
+        raise ConfigError(f"config: [design] verified must be true or false, got {cfg['design']['verified']!r}")
     seed = cfg.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise ConfigError(f"config: seed must be an integer in [0, 2^63), got {seed!r}")
@@ -166,6 +187,7 @@ class _Bounds:
 
     def __init__(self, nominal, box_path=None, payload=None):
         self.nominal, self.box_path, self.payload = nominal, box_path, payload
+        self.urdf_uncertainty = 0.0  # [plant] urdf_uncertainty: the plants' arm beyond the bounds
         self._box = self._paper = self._cert = self._pay = None
 
     @property
@@ -206,17 +228,33 @@ class _Bounds:
         return self.box.source
 
 
+def _urdf_box(nominal, bounds: _Bounds):
+    """The URDF's own uncertainty of the plants (``[plant] urdf_uncertainty``), or None."""
+    f = getattr(bounds, "urdf_uncertainty", 0.0)
+    if not f:
+        return None
+    from .uncertainty.box import urdf_box
+
+    return urdf_box(nominal, f)
+
+
 def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
     if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
         lock = getattr(nominal, "locked", None)
         plant = type(nominal).from_urdf(spec, lock=lock) if lock else type(nominal).from_urdf(spec)
     elif bounds.payload is not None:
-        plant = _payload_plant(nominal, bounds.payload, spec)
+        plant = _payload_plant(nominal, bounds.payload, spec, _urdf_box(nominal, bounds))
     elif spec == "nominal":
         plant = nominal
     else:
         # random draws are redrawn (same seeded stream) until the robot is physical
-        plant = perturb(nominal, bounds.box, spec, simulable=spec.startswith("random"))
+        ubox = _urdf_box(nominal, bounds)
+        if ubox is not None:  # the plants go beyond the box by the URDF's own error (the model keeps the box)
+            from .uncertainty.box import widened
+
+            plant = perturb(nominal, widened(bounds.box, ubox), spec, simulable=spec.startswith("random"))
+        else:
+            plant = perturb(nominal, bounds.box, spec, simulable=spec.startswith("random"))
     plant.require_simulable()
     return plant
 
@@ -224,7 +262,7 @@ def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
 def _drawn(spec) -> bool:
     """True for a plant spec drawn from an ellipsoid of bounds (``centre``, ``random:``, ``boundary:``)."""
     kind = str(spec).strip().partition(":")[0].lower()
-    return kind in ("centre", "center", "random", "boundary")
+    return kind in ("centre", "center", "random", "boundary", "lightest")
 
 
 def _bounds_plant(nominal, bf: dict, spec: str):
@@ -235,13 +273,28 @@ def _bounds_plant(nominal, bf: dict, spec: str):
     return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}")
 
 
-def _payload_plant(nominal, payload, spec: str):
+def _payload_plant(nominal, payload, spec: str, ubox=None):
     """The plant carrying a payload: ``upper`` (default, also for ``nominal``) the heaviest,
-    ``lower`` the lightest, ``random:<seed>`` a seeded uniform mass, ``mass:<kg>`` a given one."""
+    ``lower`` the lightest, ``random:<seed>`` a seeded uniform mass, ``mass:<kg>`` a given one.
+
+    With the URDF's own uncertainty ``ubox`` (a :class:`rc3r.uncertainty.box.Box`, ``[plant]
+    urdf_uncertainty``) ``random:<seed>`` also draws the arm in it (seed ``SeedSequence([seed, 36])``),
+    and ``<payload spec>+corner:<bits>[@s]`` puts the arm at a corner of it (``rc3r design``'s search)."""
     from .uncertainty.payload import with_payload
 
     (lo, hi), com = payload
+    spec, plus, arm = spec.partition("+")
+    if plus and ubox is None:
+        raise ConfigError(f"plant {spec}+{arm!r}: '+' needs [plant] urdf_uncertainty > 0")
     kind, _, arg = spec.partition(":")
+    if ubox is not None:
+        from .uncertainty.box import perturb
+
+        if plus:  # checked with the payload on (_plant): the search realised it so
+            nominal = perturb(nominal, ubox, arm)
+        elif kind == "random" and arg.isdigit():
+            sub = int(np.random.SeedSequence([int(arg), 36]).generate_state(1, np.uint64)[0] >> np.uint64(1))
+            nominal = perturb(nominal, ubox, f"random:{sub}", simulable=True)
     if kind in ("nominal", "upper") and not arg:
         m = hi
     elif kind == "lower" and not arg:
@@ -387,6 +440,14 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     if payload is not None and model_cfg.get("theta") != "plant":
         perturbed = True  # a payload range is unknown to the controller: it gets theta_0 and rho of the range
     box_bounds = _Bounds(nominal, box or cfg.get("box") or plant_cfg.get("box"), payload)
+    try:
+        box_bounds.urdf_uncertainty = float(plant_cfg.get("urdf_uncertainty", 0.0))
+    except (TypeError, ValueError):
+        raise ConfigError(f"[plant] urdf_uncertainty must be a fraction in [0, 1), got "
+                          f"{plant_cfg.get('urdf_uncertainty')!r}") from None
+    if not 0.0 <= box_bounds.urdf_uncertainty < 1.0:
+        raise ConfigError(f"[plant] urdf_uncertainty must be a fraction in [0, 1), got "
+                          f"{box_bounds.urdf_uncertainty!r}")
     spec = plant or plant_cfg.get("spec", "nominal")
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])

@@ -96,7 +96,10 @@ def _q(x, p):
 
 
 def montecarlo_summary(rows: list[dict]) -> dict:
-    """Per controller: runs, ok, diverged, max error quantiles, and the bound check (robust laws)."""
+    """Per controller: runs, ok, diverged, every verdict's count (``verdicts``: clean, chattering, saturated,
+    limit-violated, diverged, interrupted), max error quantiles, and the bound check (robust laws)."""
+    from ..simulate.verdict import VERDICTS
+
     out = {}
     for c in sorted({r["controller"] for r in rows}):
         rs = [r for r in rows if r["controller"] == c]
@@ -104,8 +107,10 @@ def montecarlo_summary(rows: list[dict]) -> dict:
         err = np.array([r["max_error"] for r in ok])
         cov = [r for r in rs if r["covered"]]
         checked = [r for r in cov if r["exceeds_bound"] is not None]
+        verdicts = {v: sum(1 for r in rs if r.get("verdict") == v) for v in reversed(VERDICTS)}
+        verdicts["diverged"] += sum(1 for r in rs if not r.get("verdict") and r["status"] != "ok")
         out[c] = {
-            "runs": len(rs), "ok": len(ok), "diverged": len(rs) - len(ok),
+            "runs": len(rs), "ok": len(ok), "diverged": len(rs) - len(ok), "verdicts": verdicts,
             "max_error_median": _q(err, 0.5), "max_error_p95": _q(err, 0.95),
             "max_error_max": float(err.max()) if err.size else None,
             "final_error_median": _q([r["final_error"] for r in ok], 0.5),

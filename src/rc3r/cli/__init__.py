@@ -243,8 +243,9 @@ def build_parser() -> argparse.ArgumentParser:
     mc = sub.add_parser("montecarlo", help="every controller on N plants drawn from the box")
     mc.add_argument("--n", type=_positive(int), default=200, help="plants (default 200)")
     mc.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="campaign seed (default 0)")
-    mc.add_argument("--controllers", default="fbl,robust", type=_controllers,
-                    help=f"comma-separated laws ({', '.join(LAWS)}; default fbl,robust)")
+    mc.add_argument("--controllers", type=_controllers,
+                    help=f"comma-separated laws ({', '.join(LAWS)}; default: the config's [controller] kind "
+                         "(a design.toml's recommended law) and fbl, else fbl,robust)")
     mc.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")
     mc.add_argument("--rate", type=_positive(), help="sampled-data controller rate [Hz] (default: continuous)")
     _campaign_args(mc, "out/montecarlo")

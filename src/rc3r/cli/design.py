@@ -1,10 +1,12 @@
 """``rc3r design``: gains and eps for a controller rate, verified over the bounds (docs/design.md).
 
 Writes into ``--out`` (as a whole, :mod:`rc3r.cli._output`): ``design.toml`` (a configuration for
-``rc3r run --config`` and ``rc3r montecarlo --config``), ``design.md``, ``design.json``,
-``design.png`` and ``runs.csv`` (every verification run, the rows of ``rc3r montecarlo``).
-Exit 0 when a robust law (eq. 6 or eq. 7) was clean at the rate and at rate / margin on every plant, 1 when none was
-(the files are written with the fast form's gains and say so), 2 on bad input (nothing written).
+``rc3r run``, ``montecarlo`` and ``export --config``: ``[controller] kind`` the recommended law, ``[gains.<law>]``
+every law's gains, ``[design] verified``), ``design.md``, ``design.json``, ``design.png`` and ``runs.csv``
+(every verification run, the rows of ``rc3r montecarlo``).
+Exit 0 when a robust law (eq. 6 or eq. 7) was clean at the rate and at rate / margin on every plant (the random
+ones and the searched hardest ones), 1 when none was (the files are written with the fast form's gains,
+``verified = false``, and the command says why and what to try), 2 on bad input (nothing written).
 """
 from __future__ import annotations
 
@@ -43,6 +45,10 @@ def add_parser(sub) -> None:
     d.add_argument("--box", help="box TOML: verified on the nominal robot and --n random plants of the box")
     d.add_argument("--bounds", metavar="FILE", help="bounds.toml of rc3r identify (verified on the nominal robot)")
     d.add_argument("--rate", type=_positive(), required=True, help="controller rate [Hz]")
+    d.add_argument("--urdf-uncertainty", type=_fraction, metavar="FRACTION",
+                   help="the URDF's own error, verified beyond a payload range or a box: every standard parameter "
+                        "of every link FRACTION of its magnitude lighter or heavier (default 0.5; 0: off; "
+                        "never with --bounds)")
     d.add_argument("--config", help="TOML with the trajectory, plant effects, bounds (no gains: they are designed)")
     d.add_argument("--margin", type=_margin, default=2.0,
                    help="the design must also be clean at rate / MARGIN (default 2; 1: at the rate only)")
@@ -55,6 +61,19 @@ def add_parser(sub) -> None:
     d.add_argument("--out", required=True, help="output directory (written as a whole)")
     d.add_argument("--force", action="store_true", help="replace an earlier design in --out")
     plant_args(d)
+
+
+def _fraction(text):
+    import argparse
+    import math
+
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(x) and 0 <= x < 1):
+        raise argparse.ArgumentTypeError(f"must be a fraction in [0, 1), got {text}")
+    return x
 
 
 def _margin(text):
@@ -94,7 +113,7 @@ class _Bar:
 def cmd_design(args) -> int:
     """``rc3r design``: the rule, the verification, the files (module docstring)."""
     from ..campaign import RunTable, columns
-    from ..design.report import design_figure, design_markdown, design_toml
+    from ..design.report import design_figure, design_markdown, design_toml, failure_line, next_steps
     from ..design.verify import design_config, verify_design
     from ..campaign.runner import prepare
     from ..study import build_run
@@ -109,7 +128,7 @@ def cmd_design(args) -> int:
     cfg = design_config(cfg, robot=args.robot, urdf=opts["urdf"], lock=opts["lock"], payload=args.payload,
                         payload_com=args.payload_com, box=args.box, bounds=args.bounds, friction=opts["friction"],
                         torque_limit=opts["torque_limit"], noise=opts["noise"], delay=opts["delay"],
-                        duration=args.duration, tolerance=opts["tolerance"])
+                        duration=args.duration, tolerance=opts["tolerance"], urdf_uncertainty=args.urdf_uncertainty)
     if opts.get("plant_engine"):
         cfg.setdefault("plant", {})["engine"] = opts["plant_engine"]
     first = build_run(controller="robust", config=cfg, rate=args.rate, eps=1.0)  # bad input refused here
@@ -148,7 +167,8 @@ def cmd_design(args) -> int:
     g = res.gains()["robust"]
     fbl = res.baselines.get("fbl", {}).get("worst_error")
     ch = res.chosen
-    worst = None if ch is None else ch["at_rate"]["worst_error"]
+    last = ch or (max(res.levels, key=lambda x: x["eps"]) if res.levels else None)
+    worst = None if last is None else last["at_rate"].get("worst_error")
     word = "clean" if res.eq6_ok else ("NOT clean (eq. 6; eq. 7 is)" if res.ok else "NOT clean")
     low = res.lowest_clean_rate()
     def num(x, fmt=".3g"):
@@ -159,14 +179,19 @@ def cmd_design(args) -> int:
         ("; diagonal of b M(q_d(0))" if kk.ndim == 2 else "") + \
         (f"] + {g['K_inertia']:.4g} M(q) [scheduled" if g.get("K_inertia") else "")
     print(f"{word}: eps = {g['eps']:.4g} (rule: {res.design.eps:.4g}, stability boundary {res.design.eps_stable:.4g}), "
-          f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad (FBL {num(fbl)}); lowest clean "
+          f"Lambda = {g['Lambda']:.4g}, K = [{ks}]; worst max|e| {num(worst)} rad{'' if ch else ' (largest eps tried)'} (FBL {num(fbl)}); lowest clean "
           f"rate {num(low, '.4g')} Hz; {len(res.levels)} eps tried, wall {wall:.1f} s -> {out}/")
     rec = res.recommendation()
     if rec is not None:
         print(f"recommended robust law: {rec['law']} ({rec['why']}; FBL {num(rec['fbl_worst_error'])} rad)")
+    for law, w in res.worst.items():
+        print(f"hardest plant for {law}: {w['spec'][:48]}{'...' if len(w['spec']) > 48 else ''}: T lambda_max = "
+              f"{w['T_lambda']:.3g} (limit {w['limit']:.3g}; the rule's on the controller's model "
+              f"{num(w.get('model_T_lambda'))})")
     if not res.ok:
-        print(f"rc3r design: neither eq. 6 (no eps tried) nor eq. 7 was clean on every plant at {args.rate:g} and "
-              f"{args.rate / args.margin:g} Hz; {out}/design.toml has the rule's gains, unverified (see design.md)",
-              file=sys.stderr)
+        print(f"rc3r design: NOT verified: neither eq. 6 (no eps tried was clean) nor eq. 7 was clean on every plant "
+              f"at {args.rate:g} and {args.rate / args.margin:g} Hz: {failure_line(res)}", file=sys.stderr)
+        print("rc3r design: to try: " + "; ".join(next_steps(res)) + f". {out}/design.toml says verified = false "
+              "(run, montecarlo and export warn; export refuses it without --force)", file=sys.stderr)
         return EXIT["check_failed"]
     return EXIT["ok"]

@@ -26,6 +26,14 @@ def cmd_export(args) -> int:
     cfg = read_toml(args.config, "config file")
     spec = build_run(robot=args.robot, controller=args.controller, rate=args.rate, eps=args.eps, config=cfg,
                      **plant_options(args))
+    from ..study import design_unverified, design_warning
+
+    warning = design_warning(cfg)
+    if warning is not None and not args.force:
+        raise ConfigError(f"{args.config} is a design that did NOT verify: export refused (give --force to export "
+                          "its unverified gains anyway)")
+    if warning is not None:
+        print(warning, file=sys.stderr)
     ctrl = Controller.from_run(spec)
     check_exportable(ctrl.law, ctrl.trajectory)  # a law, trajectory or robot without a C port: before any work
     regressor_source(ctrl.model)
@@ -38,7 +46,8 @@ def cmd_export(args) -> int:
           file=sys.stderr, flush=True)
     with output_dir(out, own=FILES) as tmp:
         info = write_export(spec, tmp, count=args.states, calls_per_sample=args.calls_per_sample,
-                            provenance=provenance(config=cfg, seed=spec.seed))
+                            provenance=provenance(config=cfg, seed=spec.seed),
+                            unverified=design_unverified(cfg))
     print(f"wrote {out}/rc3r_controller.c and .h ({info['exported']}), {info['calls']} recorded calls; "
           f"check with: make -C {out} check")
     return 0
@@ -59,7 +68,7 @@ def add_parser(sub) -> None:
     e.add_argument("--rate", type=_positive(), help="controller rate [Hz] (default: the config's, else continuous)")
     e.add_argument("--eps", type=_positive(), help="boundary layer eps of the robust laws")
     e.add_argument("--out", required=True, help="output directory (written as a whole)")
-    e.add_argument("--force", action="store_true", help="replace an earlier export in --out")
+    e.add_argument("--force", action="store_true", help="replace an earlier export in --out; export a design.toml that did not verify")
     e.add_argument("--states", type=_positive(int), default=STATES,
                    help=f"calls recorded for the check (default {STATES})")
     e.add_argument("--calls-per-sample", type=_positive(int), default=1,

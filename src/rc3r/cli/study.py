@@ -156,8 +156,15 @@ def cmd_montecarlo(args) -> int:
     """``rc3r montecarlo``: every controller on N plants drawn from the box."""
     from ..campaign.figures import error_distribution, error_vs_distance
 
-    controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]
+    from ..study import design_warning
+
     cfg = _config(args)
+    if args.controllers is None:  # a design.toml's recommended law, and FBL beside it
+        kind = cfg.get("controller", {}).get("kind") if isinstance(cfg.get("controller"), dict) else None
+        args.controllers = ",".join(dict.fromkeys([kind, "fbl"])) if kind else "fbl,robust"
+    controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]
+    if design_warning(cfg):
+        print(design_warning(cfg), file=sys.stderr)
     jobs = montecarlo_jobs(args.n, args.seed, controllers, eps=args.eps, rate=args.rate, duration=args.duration,
                            robot=args.robot, box=args.box, config=cfg)
     request = {"n": args.n, "seed": args.seed, "controllers": controllers, "eps": args.eps, "rate": args.rate,
@@ -172,12 +179,15 @@ def cmd_montecarlo(args) -> int:
         atomic_savefig(error_distribution(rows, f"max error per controller: {title}"), out / "error_cdf.png")
         atomic_savefig(error_vs_distance(rows, meta["radii"] or {}, f"max error vs ||theta - theta_0||: {title}"),
                        out / "error_vs_distance.png")
-        lines = ["| controller | runs | diverged | median max|e| [rad] | p95 | max | inside ball | bound exceeded |",
-                 "|---|---|---|---|---|---|---|---|"]
+        lines = ["| controller | runs | clean | chattering | saturated | limit-violated | diverged | "
+                 "median max|e| [rad] | p95 | max | inside ball | bound exceeded |",
+                 "|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for c, s in summary.items():
             exceeded = "-" if s["bound_exceeded"] is None else f"{s['bound_exceeded']} of {s['bound_checked']}"
             inside = "-" if s["inside_ball"] is None else str(s["inside_ball"])
-            lines.append(f"| {c} | {s['runs']} | {s['diverged']} | {_g(s['max_error_median'])} | "
+            v = s["verdicts"]
+            lines.append(f"| {c} | {s['runs']} | {v['clean']} | {v['chattering']} | {v['saturated']} | "
+                         f"{v['limit-violated']} | {v['diverged']} | {_g(s['max_error_median'])} | "
                          f"{_g(s['max_error_p95'])} | {_g(s['max_error_max'])} | {inside} | {exceeded} |")
         atomic_write_text(out / "summary.md", "\n".join(lines) + "\n")
         print("\n".join(lines))

@@ -6,6 +6,8 @@ with ``[gains.<law>]`` for robust, robust-coeff, adaptive, fbl and pd and ``[sim
 """
 from __future__ import annotations
 
+from collections import Counter
+
 import numpy as np
 
 __all__ = ["design_toml", "design_markdown", "design_figure", "predicted_bound"]
@@ -19,11 +21,86 @@ def design_toml(result, header: str = "") -> str:
     sim = dict(result.config.get("simulation", {}))
     sim["rate"] = float(result.rate)
     cfg["gains"] = result.gains()
+    rec = result.recommendation()
+    law = rec["law"] if rec is not None else "robust"
+    cfg["controller"] = {"kind": law}
     cfg["simulation"] = sim
+    cfg["design"] = design_table(result)
     top = ("Gains and boundary layer for a sampled controller, chosen by rc3r design (docs/design.md).\n"
-           "rc3r run --config design.toml [--controller robust|robust-coeff|adaptive|fbl|pd]; "
-           "rc3r montecarlo --config design.toml")
+           f"[controller] kind is the recommended law ({law}{'' if rec else ': NOT verified'}): rc3r run, montecarlo "
+           "and export --config design.toml run it;\n--controller robust|robust-coeff|adaptive|fbl|pd runs "
+           "another law of [gains]. [design] verified = false: no robust law was clean (design.md says why).")
     return to_toml(cfg, top + ("\n" + header if header else ""))
+
+
+def design_table(result) -> dict:
+    """``[design]`` of design.toml: ``verified``, the ``law`` of ``[controller]``, the rate and margin, and
+    (when the worst-plant search ran) the worst plant found and its loop gain; ``note`` says why not verified."""
+    rec = result.recommendation()
+    out = {"verified": bool(result.ok), "law": rec["law"] if rec is not None else "robust",
+           "rate": float(result.rate), "margin": float(result.margin)}
+    worst = getattr(result, "worst", None) or {}
+    w = worst.get(out["law"])
+    if w:
+        out["worst_plant"] = str(w["spec"])
+        out["loop_gain"] = float(w["T_lambda"])
+    if not result.ok:
+        out["note"] = failure_line(result)
+    return out
+
+
+def failure_line(result) -> str:
+    """One line: why no robust law verified (verdict counts per law, the deciding plant)."""
+    parts = []
+    lv = [x for x in result.levels if not x["clean"]]
+    if lv:
+        last = max(lv, key=lambda x: x["eps"])
+        dec = last.get("decided_by") or {}
+        parts.append(f"eq. 6 at its largest eps tried {last['eps']:.4g}: {_verdicts(last['at_rate'])} at "
+                     f"{result.rate:g} Hz" + (f", decided by plant {dec['plant']} ({dec['verdict']} at "
+                                              f"{dec['rate']:g} Hz)" if dec else ""))
+    rc = result.baselines.get("robust-coeff")
+    if rc:
+        dec = rc.get("decided_by")
+        parts.append(f"eq. 7 at eps_i {rc.get('eps_i', float('nan')):.4g}: {_verdicts(rc)} at {result.rate:g} Hz"
+                     + (f", decided by plant {dec['plant']} ({dec['verdict']} at {dec['rate']:g} Hz)" if dec else ""))
+    return "; ".join(parts) or "no robust law was clean on every plant"
+
+
+def next_steps(result) -> list[str]:
+    """What to try when no robust law verified, from the verdicts and the hardest plant found."""
+    counts = Counter()
+    for lv in result.levels:
+        for side in ("at_rate", "at_low"):
+            counts.update(lv[side].get("verdicts", {}))
+    rc = result.baselines.get("robust-coeff") or {}
+    counts.update(rc.get("verdicts", {}))
+    counts.update((rc.get("at_low") or {}).get("verdicts", {}))
+    counts.pop("clean", None)
+    out = []
+    w = result.worst.get("robust") or result.worst.get("robust-coeff")
+    limits = []
+    if counts.get("limit-violated"):
+        limits.append(f"plants left the joint limits ({counts['limit-violated']} runs): a smaller or slower reference "
+                      "([trajectory] in --config) or a smaller payload range")
+    if counts.get("limit-violated", 0) >= counts.get("chattering", 0) + counts.get("diverged", 0):
+        out += limits  # the most common failure first
+        limits = []
+    if counts.get("chattering") or counts.get("diverged"):
+        if w and w["T_lambda"] > w["limit"]:
+            need = result.rate * w["T_lambda"] / w["limit"]
+            out.append(f"a higher --rate: the hardest plant ({w['spec']}) has T lambda_max = {w['T_lambda']:.3g} "
+                       f"> {w['limit']:.3g} at {result.rate:g} Hz, so about {need:.3g} Hz for the same gains")
+        else:
+            out.append("a higher --rate (the held loop chattered or diverged)")
+        out.append(f"a larger eps ({counts.get('chattering', 0)} runs chattered, {counts.get('diverged', 0)} "
+                   "diverged; try it on the deciding plant: rc3r run --config design.toml --plant SPEC --eps E)")
+    out += limits
+    if counts.get("saturated"):
+        out.append("torques reached the limits: a smaller payload range, or the arm's real torque limits")
+    out.append("a smaller bounds set (payload range, box) if the real arm is known better; --margin 1 verifies "
+               "at the rate only")
+    return out
 
 
 def predicted_bound(result) -> np.ndarray:
@@ -57,6 +134,8 @@ def design_markdown(result, command: str = "") -> str:
               f"(rho = {result.model['rho']:.6g}); controller rate {result.rate:g} Hz, margin {result.margin:g} "
               f"(also verified at {result.rate / result.margin:g} Hz); delay {d.delay} samples; "
               f"{len(result.plants)} plants: {', '.join(result.plants[:4])}{' ...' if len(result.plants) > 4 else ''}.",
+              "", f"Every figure of the rule and of the bound below is computed on the controller's own model: "
+              f"{result.model.get('controller_model') or 'theta_0'} -- the M the law uses, not the URDF's.",
               "", "## The rule", "",
               "Inside the boundary layer the closed loop is M r' = -(K + (rho/eps) Y Y^T) r + ...; a zero-order hold of "
               "period T (and a delay of d samples) keeps a mode lambda of M^-1 (K + (rho/eps) Y Y^T) stable while "
@@ -77,12 +156,44 @@ def design_markdown(result, command: str = "") -> str:
                                                      " -- NO eps tried was clean at both rates: see the table"),
               "", "## eps tried (robust law)", "",
               f"| eps | at {result.rate:g} Hz | worst max\\|e\\| [rad] | worst chattering [N m/s] | "
-              f"at {result.rate / result.margin:g} Hz | worst max\\|e\\| [rad] | clean |", "|---|---|---|---|---|---|---|"]
+              f"at {result.rate / result.margin:g} Hz | worst max\\|e\\| [rad] | clean | T lambda_max: model / hardest "
+              "plant | decided by |", "|---|---|---|---|---|---|---|---|---|"]
     for lv in result.levels:
         a, lo = lv["at_rate"], lv["at_low"]
+        w, dec = lv.get("worst") or {}, lv.get("decided_by")
         lines.append(f"| {lv['eps']:.4g} | {_verdicts(a)} | {_f(a.get('worst_error'))} | "
                      f"{_f(a.get('worst_chattering'))} | {_verdicts(lo)} | {_f(lo.get('worst_error'))} | "
-                     f"{'yes' if lv['clean'] else 'no'} |")
+                     f"{'yes' if lv['clean'] else 'no'} | {_f(lv.get('model_T_lambda'))} / {_f(w.get('T_lambda'))} | "
+                     + ("-" if not dec else f"{_short(dec['plant'])} ({dec['verdict']} at {dec['rate']:g} Hz"
+                        f"{', searched' if dec['searched'] else ''})") + " |")
+    lines += ["", "## Hardest plants (worst-plant search)", ""]
+    if result.search == "off" or not result.worst:
+        lines.append("* not searched.")
+    for law, w in result.worst.items():
+        gain = f"eps = {w['eps']:.4g}" if "eps" in w else f"eps_i = {w['eps_i']:.4g}"
+        lines.append(f"* {law} ({gain}) at {result.rate:g} Hz: hardest plant `{w['spec']}` ({w['why']}): "
+                     f"T lambda_max(M_p^-1 G) = **{w['T_lambda']:.3g}** against the held loop's limit "
+                     f"{w['limit']:.3g} (at t = {w['t']:.3g} s); on the controller's model (the rule's prediction) "
+                     f"{_f(w.get('model_T_lambda'))}. Inertia margin: along that direction the plant may be "
+                     f"{w['limit'] / w['T_lambda']:.3g} x the hardest plant's inertia "
+                     + ("(lighter than it: " if w['limit'] > w['T_lambda'] else "(it must be heavier: ")
+                     + f"the rule predicted {_f(None if not w.get('model_T_lambda') else w['limit'] / w['model_T_lambda'])} "
+                     "x the model's) before the held loop at the rate loses stability."
+                     + _not_clean(result, law, w))
+    f = float(result.config.get("plant", {}).get("urdf_uncertainty", 0.0))
+    lines.append(f"* URDF uncertainty: " + (f"+-{f:g} x |value| on every standard parameter of every link, beyond "
+                 "the bounds (which trust the URDF): the random plants draw it, the search visits its corners "
+                 "(docs/design.md, 'URDF uncertainty'; --urdf-uncertainty 0 turns it off)." if f else
+                 "none (the plants are the bounds' own; --urdf-uncertainty F adds it)."))
+    if result.search != "off":
+        how = ("both ends of the payload range" if result.search == "payload" else
+               "the ellipsoid's points of least inertia along the top directions of M_p^-1 G (closed form), "
+               "alternated with the top generalized eigenvector" if result.search == "ellipsoid" else
+               "corners of the box lightest along the top directions of M_p^-1 G, alternated with the top "
+               "generalized eigenvector" + (" (around the payload's lightest end)" if "payload" in result.search
+                                            else ""))
+        lines.append(f"* searched: {result.search} ({how}); the hardest plants join the random ones at every eps "
+                     "tried: clean means clean on them too.")
     lines += ["", "## The chosen gains (design.toml)", "", "| law | gains |", "|---|---|"]
     for law, table in g.items():
         text = "; ".join(f"{k} = {_vec(v)}" for k, v in table.items())
@@ -91,7 +202,7 @@ def design_markdown(result, command: str = "") -> str:
     fbl = result.baselines.get("fbl", {})
     if ch is not None:
         bound = predicted_bound(result)
-        lines += [f"* predicted ultimate bound (Spong, continuous time, model inertia {result.spectrum['m_min']:.3g}.."
+        lines += [f"* predicted ultimate bound (Spong, continuous time, the controller's model's inertia {result.spectrum['m_min']:.3g}.."
                   f"{result.spectrum['m_max']:.3g} kg m^2): max_j {bound.max():.3g} rad; worst measured max|e| "
                   f"{ch['at_rate']['worst_error']:.3g} rad at {result.rate:g} Hz "
                   f"({ch['at_rate']['worst_error'] / bound.max():.3g} of the bound).",
@@ -118,13 +229,33 @@ def design_markdown(result, command: str = "") -> str:
                      f" {rec['why']}; FBL {_f(f)} rad. Run it: `rc3r montecarlo --config design.toml "
                      f"--controllers {rec['law']},fbl`.")
     else:
-        lines.append("* recommended robust law: none (neither eq. 6 nor eq. 7 was clean on every plant at both rates).")
+        lines.append("* recommended robust law: none (neither eq. 6 nor eq. 7 was clean on every plant at both rates): "
+                     f"{failure_line(result)}. design.toml says `verified = false`.")
+        lines += ["", "## Not verified: what to try", ""] + [f"* {x}" for x in next_steps(result)]
     low = result.lowest_clean_rate()
     tried = ", ".join(f"{r['rate']:.4g} Hz {'clean' if r['clean'] else _verdicts(r)}" for r in result.low_rates)
     lines += [f"* lowest rate at which the design stayed clean: {_f(low, '.4g')} Hz"
               + (f" (below {result.rate / result.margin:g} Hz on the first four plants: {tried})" if tried else ""),
               "", "Figure: design.png (worst error and chattering against eps at the rate). Runs: runs.csv.", ""]
     return "\n".join(lines)
+
+
+def _not_clean(result, law: str, w: dict) -> str:
+    """What design.md adds to a law that is not clean over the whole set at the rate: what would make it so."""
+    rc = result.baselines.get("robust-coeff") or {}
+    clean = result.eq6_ok if law == "robust" else bool(rc.get("clean") and rc.get("clean_low", True))
+    if clean:
+        return ""
+    text = f" **{law} is not clean over the whole set at {result.rate:g} Hz**"
+    if w["T_lambda"] >= w["limit"]:
+        return text + (f": its held loop on this plant needs about {result.rate * w['T_lambda'] / w['limit']:.3g} Hz "
+                       f"with these gains, or a boundary layer about {w['T_lambda'] / w['limit']:.3g} x thicker.")
+    return text + ": its loop on the hardest plant is stable, so the failing runs are not the held loop's: see " \
+                  "'decided by' and 'Not verified: what to try'."
+
+
+def _short(spec: str) -> str:
+    return spec if len(spec) <= 24 else spec[:20] + "..."
 
 
 def _real(d: int) -> float:

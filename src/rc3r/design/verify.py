@@ -3,12 +3,16 @@ r"""The rule's fast form verified by simulation over the bounds, at the rate and
 :func:`verify_design` takes a run configuration (the arm, its bounds, the plant effects, the
 trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
 
-1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's model;
+1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's own model (theta_0's M,
+   :func:`controller_model`);
 2. runs the robust law with it on the plants of the bounds -- for a payload the lightest and the
    heaviest end and ``n`` seeded random masses, for a box its nominal robot and ``n`` seeded random
    plants (``random:<plant_seed(seed, k)>``, as ``rc3r montecarlo``), for an identification's
    bounds the ellipsoid's centre and ``n`` seeded plants drawn in it
-   (:func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`) -- at the rate and at rate / margin, as campaign jobs
+   (:func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`) -- and, for every eps tried, the three hardest
+   plants of the bounds for that eps (:mod:`rc3r.design.worst`, searched in this process: linear algebra, no
+   draw), beyond the bounds by the URDF's own uncertainty when they trust the URDF (``[plant]
+   urdf_uncertainty``) -- at the rate and at rate / margin, as campaign jobs
    (:func:`rc3r.campaign.runner.run_many`: a local pool or a Dask scheduler);
 3. starts from the fast form's eps for rate / margin (:func:`start_eps`), tightens eps by halves
    while every run is ``clean``, or backs off by doubling while one chatters, saturates, leaves the
@@ -36,13 +40,23 @@ import numpy as np
 from ..errors import ConfigError
 from .rule import fast_design, spectrum
 
-__all__ = ["DesignResult", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
+__all__ = ["DesignResult", "controller_model", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
+
+
+#: Seeded boundary draws (``boundary:0`` ...) the ellipsoid's search keeps beside its closed-form points.
+BOUNDARY_DRAWS = 24
+
+#: Default URDF uncertainty of a design whose bounds trust a URDF (docs/design.md, "URDF uncertainty"):
+#: every standard parameter of every link may be this fraction of its magnitude lighter or heavier.
+URDF_UNCERTAINTY = 0.5
 
 
 def design_config(config: dict | None = None, **options) -> dict:
     """The run configuration a design is made for: ``config`` (a ``--config`` table) with the command
     line's ``options`` written into it (``robot``, ``urdf``, ``lock``, ``payload`` (lo, hi), ``payload_com``,
-    ``box``, ``bounds``, ``friction``, ``torque_limit``, ``noise``, ``delay``, ``duration``, ``tolerance``).
+    ``box``, ``bounds``, ``friction``, ``torque_limit``, ``noise``, ``delay``, ``duration``, ``tolerance``,
+    ``urdf_uncertainty``: ``[plant] urdf_uncertainty``, default :data:`URDF_UNCERTAINTY` for bounds that trust
+    the URDF (a payload range, a box), none for an identification's ``bounds``; 0 disables it).
 
     Gains are what a design chooses: a config with ``[gains]`` or ``[controller]`` gains is refused.
     """
@@ -52,6 +66,7 @@ def design_config(config: dict | None = None, **options) -> dict:
         raise ConfigError("rc3r design chooses the gains: remove [gains] and the gains of [controller] from --config")
     cfg.pop("controller", None)
     cfg.pop("gains", None)
+    cfg.pop("design", None)
     given = [k for k in ("payload", "box", "bounds") if options.get(k) is not None]
     if len(given) > 1:
         raise ConfigError(f"give one of --payload, --box, --bounds, not {' and '.join('--' + k for k in given)}")
@@ -77,6 +92,13 @@ def design_config(config: dict | None = None, **options) -> dict:
     for key in ("friction", "torque_limit", "noise", "delay"):
         if options.get(key) is not None:
             plant[key] = options[key]
+    f = options.get("urdf_uncertainty")
+    if f is None:
+        f = plant.get("urdf_uncertainty", URDF_UNCERTAINTY)
+    if cfg.get("bounds") or float(f) == 0.0:  # identified bounds do not trust the URDF
+        plant.pop("urdf_uncertainty", None)
+    else:
+        plant["urdf_uncertainty"] = float(f)
     if plant:
         cfg["plant"] = plant
     sim = dict(cfg.get("simulation", {}))
@@ -134,6 +156,20 @@ class DesignResult:
     spectrum: dict = field(default_factory=dict)
     effort_limit: list | None = None
     eps_i: float | None = None
+    search: str = "off"
+
+    @property
+    def worst(self) -> dict:
+        """Per robust law, the hardest plant searched for its verified (else last tried) gains, with
+        ``T_lambda`` (on that plant), ``model_T_lambda`` (the rule's, on the controller's model) and ``limit``."""
+        out = {}
+        lv = self.chosen or (max(self.levels, key=lambda x: x["eps"]) if self.levels else None)
+        if lv and lv.get("worst"):
+            out["robust"] = {**lv["worst"], "model_T_lambda": lv.get("model_T_lambda"), "eps": lv["eps"]}
+        rc = self.baselines.get("robust-coeff") or {}
+        if rc.get("worst"):
+            out["robust-coeff"] = {**rc["worst"], "model_T_lambda": rc.get("model_T_lambda"), "eps_i": rc["eps_i"]}
+        return out
 
     @property
     def eq6_ok(self) -> bool:
@@ -197,7 +233,7 @@ class DesignResult:
                 "low_rates": self.low_rates, "lowest_clean_rate": self.lowest_clean_rate(),
                 "plants": self.plants, "model": self.model, "spectrum": self.spectrum,
                 "effort_limit": self.effort_limit, "gains": self.gains(), "config": self.config,
-                "recommendation": self.recommendation()}
+                "recommendation": self.recommendation(), "search": self.search, "worst": self.worst}
 
 
 def _resolve(cfg: dict, rate: float):
@@ -211,6 +247,18 @@ def _resolve(cfg: dict, rate: float):
     except ConfigError:
         pass
     return spec, rho_i
+
+
+def controller_model(spec):
+    """The controller's own model of a resolved run: the arm's kinematics with the law's theta_0
+    (:class:`rc3r.design.rule.ThetaModel`); every figure of the rule and of the report is computed on it."""
+    from .rule import ThetaModel
+
+    theta0 = spec.model.get("theta0")
+    if theta0 is None:
+        return ThetaModel(spec.robot_model, spec.robot_model.theta, f"theta of {spec.robot_model.label}")
+    src = spec.model.get("theta_source") or "theta_0"
+    return ThetaModel(spec.robot_model, theta0, f"the controller's theta_0 ({src})")
 
 
 def start_eps(design, sp, rate: float, margin: float, rho: float) -> float:
@@ -260,9 +308,117 @@ class _Runner:
         return [self.rows[j.id] for j in jobs if j.id in self.rows]
 
 
+def deciding(rows: list[dict], searched=()) -> dict | None:
+    """The plant that decided a rejected level: of the runs that were not clean, the one with the most severe
+    verdict (diverged before limit-violated, saturated, chattering), a searched worst plant first among equals,
+    then the largest max|e|; ``{"plant", "verdict", "rate", "max_error", "searched"}`` or None if all were clean."""
+    from ..simulate.verdict import VERDICTS
+
+    bad = [r for r in rows if r["verdict"] != "clean"]
+    if not bad:
+        return None
+
+    def name(r):
+        return f"random:{r['plant_seed']}" if r.get("plant_seed") not in (None, "") else str(r["job"]).split("/")[0]
+
+    sev = {v: i for i, v in enumerate(VERDICTS)}
+    r = min(bad, key=lambda r: (sev.get(r["verdict"], 0), name(r) not in searched,
+                                -float(r["max_error"]) if np.isfinite(r["max_error"]) else -np.inf))
+    return {"plant": name(r), "verdict": r["verdict"], "rate": r["rate_hz"], "max_error": float(r["max_error"]),
+            "searched": name(r) in searched}
+
+
+class _Hardest:
+    """The worst-plant search of a design (:mod:`rc3r.design.worst`) on its bounds: a box of standard
+    parameters (searched corner by corner), a payload range (its two ends, exact; with the URDF's uncertainty
+    the corners of its box around the lighter end), an identified ellipsoid (its lightest points along the
+    worst directions, closed form)."""
+
+    def __init__(self, cfg, spec, sp, rate, delay):
+        from .worst import Search
+
+        self.rate, self.delay = float(rate), int(delay)
+        self.search = Search(spec.robot_model, sp, spec.trajectory)
+        self.kind, self.box, self.ends, self.prefix = "off", None, {}, ""
+        f = float(cfg.get("plant", {}).get("urdf_uncertainty", 0.0))
+        ubox = None
+        if f > 0:
+            from ..uncertainty.box import urdf_box
+
+            ubox = urdf_box(spec.robot_model, f)
+        self.urdf_uncertainty = f
+        if cfg.get("payload"):
+            from ..study import _payload, _payload_plant
+
+            pay = _payload(cfg["payload"]["mass"], cfg["payload"].get("com"))
+            self.kind = "payload"
+            self.ends = {e: _payload_plant(spec.robot_model, pay, e).theta for e in ("lower", "upper")}
+            if ubox is not None:  # the corners of the URDF's uncertainty around the lightest end
+                from ..uncertainty.payload import with_payload
+
+                lower = with_payload(spec.robot_model, pay[0][0], pay[1], label="lower")
+                self.search = Search(lower, sp, spec.trajectory)
+                self.kind, self.box, self.prefix = "payload + URDF uncertainty", ubox, "lower+"
+        elif cfg.get("bounds"):  # the identified ellipsoid: its lightest points along the worst directions
+            from ..identify.bounds_file import load_bounds
+            from ..uncertainty.ellipsoid import draw_from_ellipsoid
+
+            bf = load_bounds(cfg["bounds"], robot=spec.robot_model)
+            self.kind = "ellipsoid"
+            self.realise = lambda s: draw_from_ellipsoid(spec.robot_model, bf["theta0"], bf["P"], s,
+                                                         source=f"bounds file {bf['source']}")
+            self.pool = [(f"boundary:{k}", self.search.mass(self.realise(f"boundary:{k}").theta))
+                         for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
+        else:
+            from ..study import resolve_box
+            from ..uncertainty.box import widened
+
+            box = resolve_box(spec.robot_model, cfg.get("box"))
+            self.kind, self.box = "box", box if ubox is None else widened(box, ubox)
+            if ubox is not None:
+                self.kind = "box + URDF uncertainty"
+
+    def gains(self, sliding, **w):
+        from .worst import loop_gains
+
+        return loop_gains(self.search, sliding, **w)
+
+    def model_gain(self, sliding, **w) -> float:
+        """T max_t lambda_max(M_0^-1 G): the rule's own figure on the controller's model."""
+        from .worst import plant_gain
+
+        return float(np.max(plant_gain(self.gains(sliding, **w), self.search.M0)[0]) / self.rate)
+
+    def plants(self, sliding, **w) -> list[dict]:
+        """The hardest plants for the law's gains (most demanding first, at most 3)."""
+        from .rule import stability_limit
+        from .worst import plant_gain, search_box
+
+        G = self.gains(sliding, **w)
+        if self.kind == "ellipsoid":
+            from .worst import search_ellipsoid
+
+            return search_ellipsoid(self.search, self.realise, G, self.rate, delay=self.delay, pool=self.pool)[:3]
+        if self.box is not None:
+            found = search_box(self.search, self.box, G, self.rate, delay=self.delay)
+            if self.prefix:  # corners of the arm around the payload's lightest end
+                found = [{**e, "spec": "lower" if e["spec"] == "nominal" else self.prefix + e["spec"]}
+                         for e in found]
+            return found[:3]
+        out = []
+        for end, theta in self.ends.items():
+            lam, _ = plant_gain(G, self.search.mass(theta))
+            k = int(np.argmax(lam))
+            out.append({"spec": end, "T_lambda": float(lam[k] / self.rate), "t": float(self.search.sp.t[k]),
+                        "limit": stability_limit(self.delay),
+                        "why": f"the payload's {end} end (M grows with the mass: the lower end is the lightest "
+                               "in every direction)"})
+        return sorted(out, key=lambda e: -e["T_lambda"])
+
+
 def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int = 50, seed: int = 0,
                   workers: int | None = None, scheduler: str | None = None, steps: int = 3,
-                  progress=None) -> DesignResult:
+                  progress=None, search: bool = True) -> DesignResult:
     """Design and verify the gains for ``rate`` [Hz] (module docstring).
 
     Parameters
@@ -285,6 +441,8 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
         At most this many halvings and doublings of eps.
     progress : callable, optional
         ``progress(what, count)``: a new batch of ``count`` runs (``what`` a label), or ``(None, 1)`` a run done.
+    search : bool
+        Add the hardest plants of the bounds for each eps tried (:mod:`rc3r.design.worst`) to the plants.
     """
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise ConfigError(f"--rate must be a finite number of Hz > 0, got {rate!r}")
@@ -293,12 +451,14 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     spec, rho_i = _resolve(cfg, rate)
     duration = spec.options.duration
     delay = 0 if spec.loop is None else int(spec.loop.delay)
-    sp = spectrum(spec.robot_model, spec.trajectory, duration)
+    model = controller_model(spec)
+    sp = spectrum(model, spec.trajectory, duration)
     rho = float(spec.model["rho"])
     design = fast_design(sp, rate, rho=rho, rho_i=rho_i, delay=delay)
     plants = plant_specs(cfg, n, seed)
     res = DesignResult(cfg, float(rate), float(margin), design, None, plants=[s for _, s in plants],
                        model={**{k: spec.model.get(k) for k in ("rho", "theta_source", "rho_source", "box", "nominal")},
+                              "controller_model": model.label,
                               "box": spec.model.get("box") or (f"identified bounds {spec.model['bounds_file']}"
                                                                if spec.model.get("bounds_file") else None)},
                        spectrum={"m_min": sp.m_min, "m_max": sp.m_max, "L_Y": sp.lam_yy(), "samples": int(sp.t.size),
@@ -307,15 +467,25 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     run = _Runner(cfg, table, duration, workers, scheduler, progress)
     sliding = {k: v for k, v in design.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
     low = rate / margin
+    hard = _Hardest(cfg, spec, sp, rate, delay) if search else None
+    res.search = hard.kind if hard is not None else "off"
+
+    def with_worst(entries):
+        names = {s for _, s in plants}
+        return plants + [(-1, e["spec"]) for e in entries if e["spec"] not in names]
 
     def level(eps):
-        jobs = run.jobs("robust", sliding, eps, rate, plants) + \
-            (run.jobs("robust", sliding, eps, low, plants) if margin > 1 else [])
+        found = hard.plants(sliding, rho=rho, eps=eps) if hard is not None else []
+        pl = with_worst(found)
+        jobs = run.jobs("robust", sliding, eps, rate, pl) + \
+            (run.jobs("robust", sliding, eps, low, pl) if margin > 1 else [])
         rows = run.run(jobs, f"robust, eps {eps:.4g}")
         at = summarize([r for r in rows if r["rate_hz"] == float(rate)])
         lo = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else at
         lv = {"eps": float(eps), "factor": float(eps / design.eps), "at_rate": at, "at_low": lo,
-              "clean": bool(at["clean"] and lo["clean"])}
+              "clean": bool(at["clean"] and lo["clean"]), "worst": found[0] if found else None,
+              "model_T_lambda": hard.model_gain(sliding, rho=rho, eps=eps) if hard is not None else None,
+              "decided_by": deciding(rows, {e["spec"] for e in found}), "plants": len(pl)}
         res.levels.append(lv)
         return lv["clean"]
 
@@ -343,24 +513,30 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     res.eps = clean
     res.levels.sort(key=lambda lv: lv["eps"])
     factor = 1.0 if res.eps is None else res.eps / design.eps
-    fbl = run.run(run.jobs("fbl", design.gains("fbl"), None, rate, plants), "fbl baseline")
+    chosen = res.chosen
+    hardest = with_worst([chosen["worst"]] if chosen is not None and chosen.get("worst") else [])
+    fbl = run.run(run.jobs("fbl", design.gains("fbl"), None, rate, hardest), "fbl baseline")
     res.baselines["fbl"] = summarize(fbl)
     if design.eps_i is not None:
         sl = dict(sliding)
         tried = [design.eps_i * factor] + ([design.eps_i] if factor != 1.0 else [])
-        for eps_i in tried:  # verified like eq. 6: every plant at the rate and at rate / margin
-            jobs = run.jobs("robust-coeff", sl, eps_i, rate, plants) + \
-                (run.jobs("robust-coeff", sl, eps_i, low, plants) if margin > 1 else [])
+        for eps_i in tried:  # verified like eq. 6: every plant (and the hardest) at the rate and at rate / margin
+            found = hard.plants(sl, rho_i=rho_i, eps_i=eps_i) if hard is not None else []
+            pl = with_worst(found)
+            jobs = run.jobs("robust-coeff", sl, eps_i, rate, pl) + \
+                (run.jobs("robust-coeff", sl, eps_i, low, pl) if margin > 1 else [])
             rows = run.run(jobs, f"robust-coeff, eps_i {eps_i:.4g}")
             rc = summarize([r for r in rows if r["rate_hz"] == float(rate)])
             rc_low = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else rc
-            res.baselines["robust-coeff"] = {**rc, "eps_i": float(eps_i), "at_low": rc_low,
-                                             "clean_low": bool(rc_low["clean"])}
+            res.baselines["robust-coeff"] = {
+                **rc, "eps_i": float(eps_i), "at_low": rc_low, "clean_low": bool(rc_low["clean"]),
+                "worst": found[0] if found else None, "decided_by": deciding(rows, {e["spec"] for e in found}),
+                "model_T_lambda": hard.model_gain(sl, rho_i=rho_i, eps_i=eps_i) if hard is not None else None}
             res.eps_i = float(eps_i)
             if rc["clean"] and rc_low["clean"]:
                 break
     res.baselines["adaptive"] = summarize(run.run(run.jobs("adaptive", design.gains("adaptive"), None, rate,
-                                                           plants), "adaptive"))
+                                                           hardest), "adaptive"))
     if res.eps is not None:
         r = low
         for _ in range(4):

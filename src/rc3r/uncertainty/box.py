@@ -311,8 +311,10 @@ def perturb(robot, box: Box, spec: str, *, simulable: bool = False):
     * ``"nominal"`` -- ``robot`` itself;
     * ``"upper"`` / ``"lower"`` -- every delta at its upper / lower end;
     * ``"paper-upper"`` -- ``p_up`` of the paper's method (:func:`rc3r.uncertainty.bounds.paper_upper`);
-    * ``"corner:<bits>"`` -- ``box.size`` characters ``0`` (lower) / ``1`` (upper)
-      in parameter order (``_`` separators allowed);
+    * ``"corner:<bits>"`` -- ``box.size`` characters ``0`` (lower) / ``1`` (upper) / ``n`` (nominal)
+      in parameter order (``_`` separators allowed); ``"corner:<bits>@<s>"`` the corner's delta times
+      s in [0, 1] (a corner pulled toward the nominal robot: ``rc3r design``'s worst-plant search), or
+      ``@<s_1>,...,<s_B>`` one s per body;
     * ``"random:<seed>"`` -- uniform in the box, ``numpy.random.default_rng(seed)``.
 
     By default the result is only checked for mass > 0: many draws of a box have
@@ -368,13 +370,22 @@ def _perturb(robot, box: Box, spec, simulable: bool):
 
         return paper_upper(robot, box)
     if kind == "corner":
-        bits = arg.replace("_", "")
-        if len(bits) != box.size or set(bits) - {"0", "1"}:
+        bits, at, frac = arg.replace("_", "").partition("@")
+        if len(bits) != box.size or set(bits) - {"0", "1", "n"}:
             raise ConfigError(
-                f"bad perturbation {spec!r}: 'corner:' needs {box.size} characters 0/1 (lower/upper) in the "
+                f"bad perturbation {spec!r}: 'corner:' needs {box.size} characters 0/1/n (lower/upper/nominal) in the "
                 f"order {box.names[0]} ... {box.names[-1]}, got {len(bits)} characters"
             )
-        return shifted(robot, box.corner([c == "1" for c in bits]), s)
+        try:
+            scale = np.array([float(x) for x in frac.split(",")]) if at else np.ones(1)
+        except ValueError:
+            scale = np.array([np.nan])
+        if scale.size not in (1, box.size // 10) or not np.all((scale >= 0.0) & (scale <= 1.0)):
+            raise ConfigError(f"bad perturbation {spec!r}: 'corner:<bits>@<s>' needs 0 <= s <= 1 (the corner's "
+                              f"delta times s), one s or one per body ({box.size // 10})")
+        scale = np.repeat(scale, 10) if scale.size > 1 else scale[0]
+        delta = np.where([c == "n" for c in bits], 0.0, box.corner([c == "1" for c in bits]))
+        return shifted(robot, scale * delta, s)
     if kind == "random":
         rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad perturbation"))
         for _ in range(10_000 if simulable else 1):
@@ -383,3 +394,23 @@ def _perturb(robot, box: Box, spec, simulable: bool):
                 return out
         raise ParameterError(f"perturbation {spec!r}: no simulable robot in 10000 draws from the box")
     raise ConfigError(f"bad perturbation {spec!r}: expected {PERTURBATIONS}")
+
+
+def urdf_box(robot, fraction: float) -> Box:
+    """The URDF's own uncertainty as a box: every standard parameter of every link may be ``fraction`` of
+    its magnitude lighter or heavier (``[-f |p_j|, +f |p_j|]``; 0: exact). Bounds that trust a URDF (a
+    payload range, a box around its values) do not cover it: ``rc3r design`` verifies with it
+    (docs/design.md, "URDF uncertainty")."""
+    f = float(fraction)
+    if not (np.isfinite(f) and 0.0 <= f < 1.0):
+        raise ConfigError(f"URDF uncertainty must be a fraction in [0, 1), got {fraction!r}")
+    std = np.abs(np.asarray(robot.standard_parameters(), dtype=float))
+    return Box(-f * std, f * std, tuple(robot.standard_parameter_names),
+               source=f"URDF uncertainty +-{f:g} x |value| on every standard parameter")
+
+
+def widened(box: Box, extra: Box) -> Box:
+    """``box`` with ``extra``'s deltas added to both ends (the same parameters)."""
+    return Box(box.lower + extra.lower, box.upper + extra.upper, box.names,
+               source=f"{box.source}, widened by {extra.source}")
+

@@ -39,13 +39,14 @@ import numpy as np
 
 from ..errors import ConfigError, ParameterError
 
-__all__ = ["MAX_DRAWS", "ELLIPSOID_SPECS", "ellipsoid_factor", "draw_theta", "realise_theta", "draw_from_ellipsoid"]
+__all__ = ["MAX_DRAWS", "ELLIPSOID_SPECS", "ellipsoid_factor", "draw_theta", "realise_theta", "draw_from_ellipsoid",
+           "lightest_theta"]
 
 #: Redraws of ``random:<seed>`` / ``boundary:<seed>`` before a non-simulable ellipsoid is refused.
 MAX_DRAWS = 200
 
 #: The plant specs :func:`draw_from_ellipsoid` understands (besides ``nominal``).
-ELLIPSOID_SPECS = "centre, random:<seed>, boundary:<seed>"
+ELLIPSOID_SPECS = "centre, random:<seed>, boundary:<seed>, lightest:<q>:<x>[:<s>]"
 
 
 def ellipsoid_factor(P) -> np.ndarray:
@@ -242,6 +243,14 @@ def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bound
             raise ParameterError(f"the centre theta_0 of {source} has no simulable plant near robot "
                                  f"'{robot.label}': {exc}") from None
         return plant
+    if kind == "lightest":
+        theta = lightest_theta(robot, theta0, P, arg, spec)
+        try:
+            plant = realise_theta(robot, theta, label=spec)
+            plant.require_simulable()
+        except ParameterError as exc:
+            raise ParameterError(f"plant {spec!r}: no simulable robot near '{robot.label}' realises it: {exc}") from None
+        return plant
     if kind not in ("random", "boundary"):
         raise ConfigError(f"bad plant {spec!r} with bounds from {source}: expected nominal, {ELLIPSOID_SPECS}")
     from .box import spec_seed
@@ -257,3 +266,30 @@ def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bound
             continue
     raise ParameterError(f"plant {spec!r}: no robot near '{robot.label}' realises any of {MAX_DRAWS} draws from the "
                          f"ellipsoid of {source} (is it the bounds of this arm?)")
+
+
+def lightest_theta(robot, theta0, P, arg: str, spec: str = "") -> np.ndarray:
+    r"""The coefficients of ``lightest:<q>:<x>[:<s>]``: the point of the ellipsoid where the inertia along the
+    direction x at the configuration q, :math:`x^T M(q;\theta) x` (linear in theta: :math:`g^T\theta`), is
+    smallest, :math:`\theta_0 - P^{-1} g / \sqrt{g^T P^{-1} g}`, moved s of the way from theta_0 (default 1).
+    q and x are n comma-separated numbers each (``rc3r design``'s worst-plant search writes them)."""
+    from ..design.rule import ThetaModel
+
+    parts = arg.split(":")
+    try:
+        q = np.array([float(v) for v in parts[0].split(",")])
+        x = np.array([float(v) for v in parts[1].split(",")])
+        s = float(parts[2]) if len(parts) > 2 else 1.0
+    except (IndexError, ValueError):
+        q = x = np.zeros(0)
+        s = float("nan")
+    if q.shape != (robot.n,) or x.shape != (robot.n,) or len(parts) > 3 or not (0.0 <= s <= 1.0) \
+            or not np.all(np.isfinite(np.concatenate([q, x]))):
+        raise ConfigError(f"bad plant {spec!r}: 'lightest:<q>:<x>[:<s>]' needs {robot.n} numbers for q and for x "
+                          "(comma-separated) and 0 <= s <= 1")
+    g = np.einsum("i,ijp,j->p", x, ThetaModel(robot, robot.theta).dM(q), x)
+    Pinv_g = np.linalg.solve(np.asarray(P, dtype=float), g)
+    norm = float(np.sqrt(max(g @ Pinv_g, 0.0)))
+    theta0 = np.asarray(theta0, dtype=float)
+    return theta0 if norm == 0.0 else theta0 - s * Pinv_g / norm
+
