@@ -163,8 +163,9 @@ def cmd_run(args) -> int:
         check_animatable(spec.plant, fmt)  # before anything is announced or simulated
     from ..study import design_warning
 
-    if design_warning(cfg):
-        _progress(design_warning(cfg))
+    warning = design_warning(cfg)
+    if warning:
+        _progress(warning)
     engine_note = announce_engine(spec)  # said after a finished run only: a diverged one prints one error line
     for warning in spec.warnings:
         _progress(f"rc3r: warning: {warning}")
