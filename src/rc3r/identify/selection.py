@@ -1,0 +1,252 @@
+r"""The identification's settings chosen by blocked cross-validation on the training part of a log.
+
+What is chosen (:func:`select`), among what the log allows:
+
+* the cut-off ``f_c`` of the parallel filter, among :data:`~rc3r.identify.filtering.CUTOFFS_HZ`
+  below the log's rate (:func:`~rc3r.identify.filtering.cutoff_candidates`: 2-20 Hz at 1 kHz,
+  2-7 Hz at 100 Hz);
+* the velocity source, logged ``qd`` or differentiated ``q`` (both only when ``qd`` is logged: a log
+  whose velocities lag its positions, e.g. a 100 Hz log of a filtered velocity estimate, scores
+  worse with them and gets the differentiated ones);
+* the weighting of the least squares, ordinary or per-joint noise
+  (:data:`~rc3r.identify.estimate.WEIGHTINGS`);
+* the Coulomb smoothing velocity ``v_s`` of ``tanh(qd / v_s)`` among :data:`COULOMB_VELOCITIES`
+  (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``).
+
+How a setting is scored. The training part (the log's first ``1 - F``, outside the filters'
+start-up) is cut into :data:`FOLDS` contiguous blocks of equal duration. For every block, the
+model is fitted exactly as :func:`rc3r.identify.pipeline.identify` fits it (the parallel-filtered
+rows ``L[Phi] x = L[tau]``, the same weighting) on the other blocks, leaving out a guard of
+``EDGE / f_c`` seconds on each side of the block (the zero-phase filter's reach: without it the
+fitted ``L[tau]`` would carry the block's own noise), and predicts the block's **logged**
+(unfiltered, resampled) torques at the states low-passed at ``f_c``: the held-out prediction of
+:mod:`rc3r.identify.pipeline`, on training data. The score of a setting is the geometric mean
+over the joints of the per-joint RMS pooled over the blocks [N m] (every joint counts alike,
+whatever its torque scale); the lowest wins.
+
+The search is in two stages, to keep ``rc3r identify`` fast: (1) every cut-off x velocity source x
+weighting at ``v_s =`` :data:`COULOMB_START`; (2) every ``v_s`` x weighting at the chosen cut-off
+and source. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
+segments (computed once per setting), so the folds and weightings cost little beyond building the
+regressor once per cut-off and source.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ConfigError
+from . import filtering as _flt
+from .estimate import WEIGHTINGS
+from .regressors import coulomb, friction_columns, identification_regressor
+
+__all__ = ["FOLDS", "COULOMB_VELOCITIES", "COULOMB_START", "filtered_rows", "predict_rows", "cv_scores", "select"]
+
+#: Contiguous blocks of the training part.
+FOLDS = 5
+
+#: Coulomb smoothing velocities ``v_s`` [rad/s] the cross-validation chooses among (0: ``sign(qd)``).
+COULOMB_VELOCITIES = (0.0, 0.003, 0.01, 0.03, 0.1)
+
+#: ``v_s`` [rad/s] of the first stage (cut-off, velocity source, weighting).
+COULOMB_START = 0.01
+
+#: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
+ITERATIONS = 2
+
+
+def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None) -> np.ndarray:
+    """``L[Y | friction]`` (K, n, m) on the coarse grid (friction filtered at the full rate).
+
+    ``arm_rows``: ``L[Y]`` (K, n, p) when already computed (only the friction columns depend on ``v_s``).
+    """
+    LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd)) if arm_rows is None else arm_rows
+    n = prep.q.shape[1]
+    qd = prep.friction_qd
+    LF = np.zeros((LY.shape[0], n, n * len(kinds)))
+    idx = np.arange(n)
+    for k, kind in enumerate(kinds):
+        col = qd if kind == "viscous" else coulomb(qd, v_s) if kind == "coulomb" else np.ones_like(qd)
+        LF[:, idx, k * n + idx] = prep.filter_full(col)[:LY.shape[0]]
+    return np.concatenate([np.asarray(LY, dtype=float), LF], axis=2)
+
+
+def predict_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
+    """``[Y | friction]`` (K, n, m) on the coarse grid at the prediction states (low-passed at the cut-off)."""
+    return identification_regressor(robot, *prep.predict, kinds, v_s)
+
+
+def _solve(G, b, w) -> np.ndarray:
+    """``argmin sum_j w_j^2 ||y_j - A_j x||^2`` from per-joint Gram ``G`` (n, m, m) and ``b`` (n, m)."""
+    w2 = np.asarray(w, dtype=float) ** 2
+    H = np.einsum("j,jkl->kl", w2, G)
+    r = w2 @ b
+    d = np.sqrt(np.diag(H))
+    d[d == 0] = 1.0
+    try:
+        return np.linalg.solve(H / np.outer(d, d), r / d) / d
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(H / np.outer(d, d), r / d, rcond=None)[0] / d
+
+
+def _fit(G, b, yy, weighting: str) -> np.ndarray:
+    """The fit of :func:`~rc3r.identify.estimate.weighted_least_squares` from per-joint sums."""
+    n = G.shape[0]
+    w = np.ones(n)
+    x = _solve(G, b, w)
+    if weighting == "per-joint":
+        for _ in range(ITERATIONS + 1):
+            rss = yy - 2.0 * np.einsum("jk,k->j", b, x) + np.einsum("k,jkl,l->j", x, G, x)
+            sig = np.sqrt(np.maximum(rss, 1e-300))
+            w = 1.0 / np.maximum(sig, 1e-12 * max(1.0, float(sig.max())))
+            x = _solve(G, b, w)
+    return x
+
+
+def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS) -> dict:
+    """Blocked cross-validation RMS per joint of a fit of ``y ~ A x`` predicting ``tau`` by ``P x`` (module docstring).
+
+    Parameters
+    ----------
+    A, P : ndarray (K, n, m)
+        The fit's filtered rows and the prediction rows on one grid of times ``t`` (K,).
+    y, tau : ndarray (K, n)
+        The filtered torques and the logged (unfiltered) ones there.
+    train : ndarray of bool (K,)
+        The rows that may be used (training part, outside the filters' start-up).
+    fc : float
+        The cut-off [Hz]: a guard of ``EDGE / fc`` s about each block is left out of its fit.
+    weightings : sequence of str
+        Scored alike on the same folds.
+    folds : int
+        Contiguous blocks.
+
+    Returns
+    -------
+    dict
+        ``{weighting: (n,) RMS [N m]}`` (``inf`` when a fold leaves too few rows to fit).
+    """
+    idx = np.nonzero(train)[0]
+    K, n, m = A.shape
+    tt = t[idx]
+    edges = np.linspace(tt[0], tt[-1], folds + 1)
+    guard = _flt.EDGE / fc
+    cuts = np.unique(np.clip(np.concatenate([edges, edges - guard, edges + guard]), tt[0], tt[-1]))
+    seg = np.clip(np.searchsorted(cuts, tt, side="right") - 1, 0, cuts.size - 2)
+    S = cuts.size - 1
+    G = np.zeros((S, n, m, m))
+    bb = np.zeros((S, n, m))
+    yy = np.zeros((S, n))
+    count = np.bincount(seg, minlength=S)
+    for j in range(n):
+        Aj = np.ascontiguousarray(A[idx, j, :])
+        yj = y[idx, j]
+        for s in range(S):
+            sel = seg == s
+            if sel.any():
+                G[s, j] = Aj[sel].T @ Aj[sel]
+                bb[s, j] = Aj[sel].T @ yj[sel]
+                yy[s, j] = yj[sel] @ yj[sel]
+    mid = 0.5 * (cuts[:-1] + cuts[1:])
+    fold_of = np.clip(np.searchsorted(edges, tt, side="right") - 1, 0, folds - 1)
+    sse = {w: np.zeros(n) for w in weightings}
+    rows = 0
+    for i in range(folds):
+        use = (mid < edges[i] - guard) | (mid > edges[i + 1] + guard)
+        if count[use].sum() * n <= 2 * m:
+            return {w: np.full(n, np.inf) for w in weightings}
+        val = idx[fold_of == i]
+        rows += val.size
+        for w in weightings:
+            x = _fit(G[use].sum(axis=0), bb[use].sum(axis=0), yy[use].sum(axis=0), w)
+            sse[w] += np.sum((tau[val] - P[val] @ x) ** 2, axis=0)
+    return {w: np.sqrt(sse[w] / rows) for w in weightings}
+
+
+def _score(rms) -> float:
+    """Geometric mean over joints of the per-joint RMS [N m]."""
+    rms = np.asarray(rms, dtype=float)
+    return float(np.exp(np.mean(np.log(np.maximum(rms, 1e-300))))) if np.all(np.isfinite(rms)) else float("inf")
+
+
+def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, coulomb_velocities,
+           grids=None, folds: int = FOLDS) -> dict:
+    """Choose cut-off, velocity source, weighting and Coulomb smoothing by cross-validation (module docstring).
+
+    Parameters
+    ----------
+    robot, log :
+        As :func:`rc3r.identify.pipeline.identify`.
+    kinds : tuple of str
+        Friction kinds (``v_s`` is only searched when ``"coulomb"`` is among them).
+    t_split : float
+        End of the training part [s].
+    cutoffs, velocities, weightings, coulomb_velocities : sequence
+        The candidates (one each: given, not searched).
+    grids : rc3r.identify.filtering.Grids, optional
+        The log resampled once.
+    folds : int
+        Contiguous blocks of the training part.
+
+    Returns
+    -------
+    dict
+        ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``score``),
+        ``candidates`` (every setting scored: its settings, ``rms`` per joint and ``score``, in
+        order), ``folds``, ``method`` (one paragraph), ``score`` (its meaning).
+    """
+    g = _flt.Grids.of(log) if grids is None else grids
+    vs = tuple(coulomb_velocities) if "coulomb" in kinds else (0.0,)
+    v0 = COULOMB_START if COULOMB_START in vs else vs[len(vs) // 2]
+    rows = []
+    best = None
+    cache = {}
+
+    def run(fc, vel, v_s, weights):
+        prep, LY, PY = cache[(fc, vel)]
+        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY)
+        P = np.concatenate([PY, friction_columns(prep.predict[1], kinds, v_s)], axis=2)
+        train = prep.usable & (prep.t <= t_split)
+        res = cv_scores(A, prep.tau, P, prep.tau_raw, prep.t, train, fc, weights, folds)
+        out = []
+        for w in weights:
+            row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
+                   "rms": [float(r) for r in res[w]], "score": _score(res[w])}
+            rows.append(row)
+            out.append(row)
+        return out
+
+    multi = len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
+    for vel in velocities:
+        for fc in cutoffs:
+            prep = _flt.prepare(log, fc, vel, grids=g)
+            LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd))
+            qp, qdp, qddp = prep.predict
+            PY = np.asarray(robot.regressor(qp, qdp, qdp, qddp), dtype=float)
+            cache = {(fc, vel): (prep, LY, PY)}
+            stage1 = vs if not multi else (v0,)
+            for v_s in stage1:
+                for row in run(fc, vel, v_s, weightings):
+                    if best is None or row["score"] < best[0]["score"]:
+                        best = (row, (prep, LY, PY))
+    if best is None or not np.isfinite(best[0]["score"]):
+        raise ConfigError(f"log {log.source}: too short to cross-validate the filter ({folds} blocks of the "
+                          "training part); give a longer log or --filter, --velocities, --weighting")
+    if multi:
+        fc, vel = best[0]["cutoff_hz"], best[0]["velocities"]
+        cache = {(fc, vel): best[1]}
+        for v_s in vs:
+            if v_s != v0:
+                for row in run(fc, vel, v_s, weightings):
+                    if row["score"] < best[0]["score"]:
+                        best = (row, best[1])
+    chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "score")}
+    lo = min(float(r["score"]) for r in rows)
+    return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
+            "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
+                       "logged torques predicted (states low-passed at the cut-off) by the parallel-filtered fit "
+                       "on the other blocks, less a guard of EDGE / f_c s at each side of the block; "
+                       + ("stage 1: every cut-off x velocity source x weighting at v_s = "
+                          f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source"
+                          if multi else "every candidate setting")),
+            "score": "geometric mean over joints of the per-joint held-out RMS pooled over the blocks [N m]; "
+                     "lowest wins"}
