@@ -26,7 +26,7 @@ whatever its torque scale); the lowest wins.
 
 The search is in two stages, to keep ``rc3r identify`` fast: (1) every cut-off x velocity source x
 weighting at ``v_s =`` :data:`COULOMB_START`; (2) every ``v_s`` x weighting at the chosen cut-off
-and source. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
+and source. The rows are thinned to a rate of at least :data:`CV_RATE_FACTOR` ``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
 segments (computed once per setting), so the folds and weightings cost little beyond building the
 regressor once per cut-off and source.
 """
@@ -49,6 +49,11 @@ COULOMB_VELOCITIES = (0.0, 0.003, 0.01, 0.03, 0.1)
 
 #: ``v_s`` [rad/s] of the first stage (cut-off, velocity source, weighting).
 COULOMB_START = 0.01
+
+#: The cross-validation's rows are thinned to a rate of at least this multiple of the cut-off (the filtered rows'
+#: products, whose sums are the Gram matrices, hold nothing above ``2 f_c``: sampled at ``10 f_c`` their sums are
+#: the full grid's to the filter's stop-band level).
+CV_RATE_FACTOR = 10.0
 
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
@@ -131,23 +136,27 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
     edges = np.linspace(tt[0], tt[-1], folds + 1)
     guard = _flt.EDGE / fc
     cuts = np.unique(np.clip(np.concatenate([edges, edges - guard, edges + guard]), tt[0], tt[-1]))
-    seg = np.clip(np.searchsorted(cuts, tt, side="right") - 1, 0, cuts.size - 2)
     S = cuts.size - 1
+    bounds = np.searchsorted(tt, cuts[1:-1], side="right")  # rows are in time order: segments are slices
+    starts, stops = np.concatenate([[0], bounds]), np.concatenate([bounds, [tt.size]])
     G = np.zeros((S, n, m, m))
     bb = np.zeros((S, n, m))
     yy = np.zeros((S, n))
-    count = np.bincount(seg, minlength=S)
+    count = stops - starts
+    At = np.ascontiguousarray(np.moveaxis(A[idx], 1, 0))  # (n, N, m): one contiguous block per joint
+    yt = np.ascontiguousarray(y[idx].T)
     for j in range(n):
-        Aj = np.ascontiguousarray(A[idx, j, :])
-        yj = y[idx, j]
+        nz = np.nonzero(np.any(At[j] != 0.0, axis=0))[0]  # a joint's row: most columns are zero
+        Aj = np.ascontiguousarray(At[j][:, nz])
         for s in range(S):
-            sel = seg == s
-            if sel.any():
-                G[s, j] = Aj[sel].T @ Aj[sel]
-                bb[s, j] = Aj[sel].T @ yj[sel]
-                yy[s, j] = yj[sel] @ yj[sel]
+            a, b = starts[s], stops[s]
+            if b > a:
+                G[s, j][np.ix_(nz, nz)] = Aj[a:b].T @ Aj[a:b]
+                bb[s, j, nz] = Aj[a:b].T @ yt[j, a:b]
+                yy[s, j] = yt[j, a:b] @ yt[j, a:b]
     mid = 0.5 * (cuts[:-1] + cuts[1:])
     fold_of = np.clip(np.searchsorted(edges, tt, side="right") - 1, 0, folds - 1)
+    del At
     sse = {w: np.zeros(n) for w in weightings}
     rows = 0
     for i in range(folds):
@@ -191,8 +200,8 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     -------
     dict
         ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``score``),
-        ``candidates`` (every setting scored: its settings, ``rms`` per joint and ``score``, in
-        order), ``folds``, ``method`` (one paragraph), ``score`` (its meaning).
+        ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
+        (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``, ``method`` (one paragraph), ``score`` (its meaning).
     """
     g = _flt.Grids.of(log) if grids is None else grids
     vs = tuple(coulomb_velocities) if "coulomb" in kinds else (0.0,)
@@ -202,11 +211,11 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     cache = {}
 
     def run(fc, vel, v_s, weights):
-        prep, LY, PY = cache[(fc, vel)]
-        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY)
-        P = np.concatenate([PY, friction_columns(prep.predict[1], kinds, v_s)], axis=2)
-        train = prep.usable & (prep.t <= t_split)
-        res = cv_scores(A, prep.tau, P, prep.tau_raw, prep.t, train, fc, weights, folds)
+        prep, LY, PY, th = cache[(fc, vel)]
+        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY)[th]
+        P = np.concatenate([PY, friction_columns(prep.predict[1][th], kinds, v_s)], axis=2)
+        train = (prep.usable & (prep.t <= t_split))[th]
+        res = cv_scores(A, prep.tau[th], P, prep.tau_raw[th], prep.t[th], train, fc, weights, folds)
         out = []
         for w in weights:
             row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
@@ -220,14 +229,15 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         for fc in cutoffs:
             prep = _flt.prepare(log, fc, vel, grids=g)
             LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd))
-            qp, qdp, qddp = prep.predict
+            th = slice(None, None, max(1, int(np.floor(prep.fs_coarse / (CV_RATE_FACTOR * fc)))))
+            qp, qdp, qddp = (X[th] for X in prep.predict)
             PY = np.asarray(robot.regressor(qp, qdp, qdp, qddp), dtype=float)
-            cache = {(fc, vel): (prep, LY, PY)}
+            cache = {(fc, vel): (prep, LY, PY, th)}
             stage1 = vs if not multi else (v0,)
             for v_s in stage1:
                 for row in run(fc, vel, v_s, weightings):
                     if best is None or row["score"] < best[0]["score"]:
-                        best = (row, (prep, LY, PY))
+                        best = (row, cache[(fc, vel)])
     if best is None or not np.isfinite(best[0]["score"]):
         raise ConfigError(f"log {log.source}: too short to cross-validate the filter ({folds} blocks of the "
                           "training part); give a longer log or --filter, --velocities, --weighting")
@@ -242,6 +252,7 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "score")}
     lo = min(float(r["score"]) for r in rows)
     return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
+            "stage1_coulomb_velocity": float(v0) if multi else None,
             "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
                        "logged torques predicted (states low-passed at the cut-off) by the parallel-filtered fit "
                        "on the other blocks, less a guard of EDGE / f_c s at each side of the block; "
