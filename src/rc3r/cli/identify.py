@@ -108,6 +108,7 @@ def _fmt(xs, digits: int = 3) -> str:
 
 def cmd_identify(args) -> int:
     """``rc3r identify LOG``: writes identified.json, bounds.toml, torque.png, residuals.png into --out."""
+    from ..identify._blas import blas_threads
     from ..identify.bounds_file import write_bounds
     from ..identify.figures import residual_figure, torque_figure
     from ..identify.log import load_log
@@ -122,10 +123,11 @@ def cmd_identify(args) -> int:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     robot = _robot(args)
     log = load_log(args.log, n=robot.n)  # no progress line: a refused log must leave one line on stderr
-    res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
-                   confidence=args.confidence, velocities=args.velocities, consistency=not args.no_consistency,
-                   covariance=args.covariance, seed=args.seed, weighting=args.weighting,
-                   coulomb_velocity=args.coulomb_velocity)
+    with blas_threads(1):  # narrow matrices: spinning BLAS threads cost more than they gain (identify._blas)
+        res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
+                       confidence=args.confidence, velocities=args.velocities,
+                       consistency=not args.no_consistency, covariance=args.covariance, seed=args.seed,
+                       weighting=args.weighting, coulomb_velocity=args.coulomb_velocity)
     prov = provenance(seed=args.seed)
     data = res.to_dict() | {"provenance": prov}
     lock = dict(args.lock) if args.lock else {}
