@@ -284,7 +284,7 @@ class Prepared:
     friction_qd : ndarray (G, n)
         Velocities on the full grid (for the friction columns).
     predict : tuple of three ndarray (K, n)
-        ``q, qd, qdd`` low-passed at ``PREDICT_FACTOR x cutoff_hz`` (less noise), for predictions.
+        ``q, qd, qdd`` low-passed at ``PREDICT_FACTOR x cutoff_hz`` (the cut-off), for predictions.
     usable : ndarray of bool (K,)
         Outside the filters' start-up.
     fs, fs_coarse : float
