@@ -58,7 +58,7 @@ never a bias, since both sides are filtered alike) and needs longer edges.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -113,13 +113,25 @@ def cutoff_candidates(fs: float, candidates=CUTOFFS_HZ) -> tuple:
 
 @dataclass(frozen=True, eq=False)
 class Grids:
-    """A log resampled once on its uniform grid (``t`` (G,), ``q``, ``qd`` or None, ``tau`` (G, n), ``fs``)."""
+    """A log resampled once on its uniform grid (``t`` (G,), ``q``, ``qd`` or None, ``tau`` (G, n), ``fs``).
+
+    :meth:`lowpass` remembers its results: the cross-validation prepares one log at many cut-offs
+    and velocity sources, which share most of their filtered signals.
+    """
 
     t: np.ndarray
     q: np.ndarray
     qd: np.ndarray | None
     tau: np.ndarray
     fs: float
+    _memo: dict = field(default_factory=dict, repr=False)
+
+    def lowpass(self, name: str, fc: float) -> np.ndarray:
+        """:func:`lowpass` of the signal ``name`` (``"q"``, ``"qd"`` or ``"tau"``) at ``fc`` [Hz], remembered."""
+        key = (name, float(fc))
+        if key not in self._memo:
+            self._memo[key] = lowpass(getattr(self, name), self.fs, fc)
+        return self._memo[key]
 
     @classmethod
     def of(cls, log) -> "Grids":
@@ -330,12 +342,13 @@ class Prepared:
 
 
 def prepare(log, cutoff_hz: float, velocities: str = "auto", floors: dict | None = None,
-            grids: Grids | None = None) -> Prepared:
+            grids: Grids | None = None, coarse_factor: float = COARSE_FACTOR) -> Prepared:
     """Resample and filter ``log`` for the fit at cut-off ``cutoff_hz`` (module docstring, steps 1-5).
 
     ``velocities``: ``"auto"`` (:func:`velocity_source` from ``floors`` = ``{"q": ..., "qd": ...}``,
     else differentiated), ``"logged"`` or ``"differentiated"``. ``grids``: ``Grids.of(log)`` when
-    already computed (the cross-validation prepares one log many times).
+    already computed (the cross-validation prepares one log many times). ``coarse_factor``: the
+    coarse grid's rate is at least this multiple of the states' cut-off (:data:`COARSE_FACTOR`).
     """
     g = Grids.of(log) if grids is None else grids
     grid, fs = g.t, g.fs
@@ -349,15 +362,15 @@ def prepare(log, cutoff_hz: float, velocities: str = "auto", floors: dict | None
     if velocities == "logged" and log.qd is None:
         raise ConfigError(f"log {log.source} has no velocities (qd1..qdn) to use")
     dt = 1.0 / fs
-    qf = lowpass(g.q, fs, fsc)
-    qdf = lowpass(g.qd, fs, fsc) if velocities == "logged" else np.gradient(qf, dt, axis=0)
+    qf = g.lowpass("q", fsc)
+    qdf = g.lowpass("qd", fsc) if velocities == "logged" else np.gradient(qf, dt, axis=0)
     qddf = np.gradient(qdf, dt, axis=0)
-    step = max(1, int(np.floor(fs / (COARSE_FACTOR * fsc))))
+    step = max(1, int(np.floor(fs / (coarse_factor * fsc))))
     fp = PREDICT_FACTOR * cutoff_hz
-    qp = lowpass(g.q, fs, fp)
-    qdp = lowpass(g.qd, fs, fp) if velocities == "logged" else np.gradient(qp, dt, axis=0)
+    qp = g.lowpass("q", fp)
+    qdp = g.lowpass("qd", fp) if velocities == "logged" else np.gradient(qp, dt, axis=0)
     predict = (qp[::step], qdp[::step], np.gradient(qdp, dt, axis=0)[::step])
-    tau_f = lowpass(g.tau, fs, cutoff_hz)
+    tau_f = g.lowpass("tau", cutoff_hz)
     tc = grid[::step]
     edge = EDGE / cutoff_hz
     usable = (tc >= grid[0] + edge) & (tc <= grid[-1] - edge)

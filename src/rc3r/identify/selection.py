@@ -26,7 +26,8 @@ whatever its torque scale); the lowest wins.
 
 The search is in two stages, to keep ``rc3r identify`` fast: (1) every cut-off x velocity source x
 weighting at ``v_s =`` :data:`COULOMB_START`; (2) every ``v_s`` x weighting at the chosen cut-off
-and source. The rows are thinned to a rate of at least :data:`CV_RATE_FACTOR` ``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
+and source. The cross-validation's coarse grid is coarser than the final fit's
+(:data:`CV_COARSE_FACTOR`), and its rows are thinned to a rate of at least :data:`CV_RATE_FACTOR` ``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
 segments (computed once per setting), so the folds and weightings cost little beyond building the
 regressor once per cut-off and source.
 """
@@ -55,23 +56,37 @@ COULOMB_START = 0.01
 #: the full grid's to the filter's stop-band level).
 CV_RATE_FACTOR = 10.0
 
+#: The cross-validation's coarse grid runs at no less than this multiple of the states' cut-off ``5 f_c``
+#: (the final fit: :data:`~rc3r.identify.filtering.COARSE_FACTOR`, 10): the arm's regressor, evaluated there
+#: and low-passed at ``f_c``, aliases only content from above ``19 f_c`` into the band, where the states'
+#: filter has removed all but 2e-5 of it.
+CV_COARSE_FACTOR = 4.0
+
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
 
 
-def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None) -> np.ndarray:
+def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dict | None = None) -> np.ndarray:
     """``L[Y | friction]`` (K, n, m) on the coarse grid (friction filtered at the full rate).
 
-    ``arm_rows``: ``L[Y]`` (K, n, p) when already computed (only the friction columns depend on ``v_s``).
+    ``arm_rows``: ``L[Y]`` (K, n, p) when already computed (only the friction columns depend on
+    ``v_s``); ``memo``: a dict that keeps the filtered viscous and offset columns between calls on
+    the same ``prep``.
     """
     LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd)) if arm_rows is None else arm_rows
     n = prep.q.shape[1]
     qd = prep.friction_qd
     LF = np.zeros((LY.shape[0], n, n * len(kinds)))
     idx = np.arange(n)
+    memo = {} if memo is None else memo
     for k, kind in enumerate(kinds):
-        col = qd if kind == "viscous" else coulomb(qd, v_s) if kind == "coulomb" else np.ones_like(qd)
-        LF[:, idx, k * n + idx] = prep.filter_full(col)[:LY.shape[0]]
+        if kind == "coulomb":
+            col = prep.filter_full(coulomb(qd, v_s))
+        else:
+            if kind not in memo:
+                memo[kind] = prep.filter_full(qd if kind == "viscous" else np.ones_like(qd))
+            col = memo[kind]
+        LF[:, idx, k * n + idx] = col[:LY.shape[0]]
     return np.concatenate([np.asarray(LY, dtype=float), LF], axis=2)
 
 
@@ -211,8 +226,8 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     cache = {}
 
     def run(fc, vel, v_s, weights):
-        prep, LY, PY, th = cache[(fc, vel)]
-        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY)[th]
+        prep, LY, PY, th, memo = cache[(fc, vel)]
+        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY, memo=memo)[th]
         P = np.concatenate([PY, friction_columns(prep.predict[1][th], kinds, v_s)], axis=2)
         train = (prep.usable & (prep.t <= t_split))[th]
         res = cv_scores(A, prep.tau[th], P, prep.tau_raw[th], prep.t[th], train, fc, weights, folds)
@@ -227,12 +242,12 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     multi = len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
     for vel in velocities:
         for fc in cutoffs:
-            prep = _flt.prepare(log, fc, vel, grids=g)
+            prep = _flt.prepare(log, fc, vel, grids=g, coarse_factor=CV_COARSE_FACTOR)
             LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd))
             th = slice(None, None, max(1, int(np.floor(prep.fs_coarse / (CV_RATE_FACTOR * fc)))))
             qp, qdp, qddp = (X[th] for X in prep.predict)
             PY = np.asarray(robot.regressor(qp, qdp, qdp, qddp), dtype=float)
-            cache = {(fc, vel): (prep, LY, PY, th)}
+            cache = {(fc, vel): (prep, LY, PY, th, {})}
             stage1 = vs if not multi else (v0,)
             for v_s in stage1:
                 for row in run(fc, vel, v_s, weightings):
