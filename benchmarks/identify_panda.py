@@ -1,4 +1,4 @@
-"""rc3r identify on a real Franka Panda log beside a plain least-squares baseline: ``python benchmarks/identify_panda.py``.
+"""rc3r identify on a real Panda log beside a plain least-squares baseline: ``python benchmarks/identify_panda.py``.
 
 The log (Gaz et al., RA-L 2019; GPL-3, not in this repository) is looked for as
 ``$RC3R_SHARED_DATA/panda_gaz/exciting_traj_1.npz`` or ``shared/data/panda_gaz/`` beside the repository
@@ -10,9 +10,9 @@ on the first 70 % of the log's duration, test on the last 30 %) of:
 
 * ``rc3r identify LOG --robot panda --test-fraction 0.3`` with its defaults (run as a command; its
   wall time is printed too), read from its identified.json;
-* a plain ordinary least squares at 5, 10 and 20 Hz, and at 100 Hz (FIGAROH's default cut-off), computed here, independently of rc3r's
-  identification code (Pinocchio + NumPy + SciPy only; rc3r is used to locate example-robot-data's
-  Panda URDF and nothing else). The recipe (FIGAROH's, with its cut-off as a parameter): the log
+* a plain ordinary least squares at 5, 10 and 20 Hz, and at 100 Hz (FIGAROH's default cut-off),
+  computed here, independently of rc3r's identification code (Pinocchio + NumPy + SciPy only; rc3r
+  is used to locate example-robot-data's Panda URDF and nothing else). The recipe (FIGAROH's, with its cut-off as a parameter): the log
   linearly interpolated onto a uniform 1 kHz grid; the training and test parts filtered separately
   by a 4th-order Butterworth run forwards and backwards (``scipy.signal.filtfilt``) at the cut-off
   on ``q``, the logged ``qd`` and ``tau``; ``qdd`` by central differences of the filtered ``qd``;
@@ -154,7 +154,8 @@ def main() -> int:
     rows = [(f"rc3r identify (defaults: {f['cutoff_hz']:g} Hz, {f['velocities']} qd, {f['weighting']}, "
              f"v_s {law['coulomb_velocity']:g})", rms)]
     for fc in (5.0, 10.0, 20.0, 100.0):
-        rows.append((f"plain OLS at {fc:g} Hz ({cols.size} base columns + 21 friction)", plain_ols(path, fc, model, cols)))
+        rows.append((f"plain OLS at {fc:g} Hz ({cols.size} base columns + {3 * model.nq} friction)",
+                     plain_ols(path, fc, model, cols)))
     print(f"log: {path} ({TEST_FRACTION:g} held out); held-out RMS vs logged torque [N m], joints 1..{model.nq}")
     width = max(len(name) for name, _ in rows)
     print(f"| {'method':<{width}} | " + " | ".join(f"j{j + 1:<4}" for j in range(model.nq)) + " |")

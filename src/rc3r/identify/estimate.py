@@ -33,7 +33,8 @@ Noise and covariance
     dies out within ``N`` rows). For white noise ``S_j = 2 sigma_j^2 / f_s`` this is
     ``(1/D) (L Z)^T (L Z)`` (Parseval), and without filtering the Gauss--Markov
     ``(A^T W A)^{-1}``; for ordinary least squares (``w_j = 1``) the white-noise sandwich is
-    ``H^{-1} (sum_j sigma_j^2 Z_j^T Z_j) H^{-1} / D``. ``sigma_j`` reported is the white-equivalent level from the filtered
+    ``H^{-1} (sum_j sigma_j^2 Z_j^T Z_j) H^{-1} / D``. ``sigma_j`` reported is the white-equivalent level
+    from the filtered
     residual: ``||r_j||^2 = sigma_j^2 (N G - m/(n D))`` with ``G`` the filter's noise gain
     (:func:`rc3r.identify.filtering.noise_gain`) and ``D`` the coarse grid's step.
 
@@ -58,7 +59,8 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit", "check_excitation", "weighted_least_squares", "spectral_covariance",
+__all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit",
+           "check_excitation", "weighted_least_squares", "spectral_covariance",
            "dominating", "ellipsoid"]
 
 #: Largest condition number of the column-scaled regressor that still counts as full rank.

@@ -64,7 +64,8 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["ORDER", "EDGE", "STATE_FACTOR", "PREDICT_FACTOR", "CUTOFFS_HZ", "cutoff_candidates", "Grids", "COARSE_FACTOR", "FLOOR_BAND", "SIGNAL_OVER_FLOOR", "BELOW_PEAK", "EDGE_FACTOR",
+__all__ = ["ORDER", "EDGE", "STATE_FACTOR", "PREDICT_FACTOR", "CUTOFFS_HZ", "cutoff_candidates", "Grids",
+           "COARSE_FACTOR", "FLOOR_BAND", "SIGNAL_OVER_FLOOR", "BELOW_PEAK", "EDGE_FACTOR",
            "CUTOFF_RANGE", "uniform_grid", "resample", "lowpass", "spectrum_edges", "choose_cutoff",
            "velocity_source", "noise_gain", "effective_dof", "power_response", "residual_density", "Prepared", "prepare"]
 

@@ -29,7 +29,8 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["FRICTION_KINDS", "coulomb", "COULOMB_LAW", "parse_friction", "friction_names", "friction_columns", "identification_regressor"]
+__all__ = ["FRICTION_KINDS", "coulomb", "COULOMB_LAW", "parse_friction", "friction_names", "friction_columns",
+           "identification_regressor"]
 
 #: Friction kinds and the prefix of their coefficient names.
 FRICTION_KINDS = {"viscous": "fv", "coulomb": "fc", "offset": "f0"}

@@ -27,9 +27,12 @@ whatever its torque scale); the lowest wins.
 The search is in two stages, to keep ``rc3r identify`` fast: (1) every cut-off x velocity source x
 weighting at ``v_s =`` :data:`COULOMB_START`; (2) every ``v_s`` x weighting at the chosen cut-off
 and source. The cross-validation's coarse grid is coarser than the final fit's
-(:data:`CV_COARSE_FACTOR`), and its rows are thinned to a rate of at least :data:`CV_RATE_FACTOR` ``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
+(:data:`CV_COARSE_FACTOR`), and its rows are thinned to a rate of at least :data:`CV_RATE_FACTOR`
+``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
 segments (computed once per setting), so the folds and weightings cost little beyond building the
-regressor once per cut-off and source.
+regressor once per cut-off and source. The fold's fit is the final fit's estimator (checked against
+:func:`~rc3r.identify.estimate.weighted_least_squares` in the tests), but the final fit's rows are
+on its own, finer grid: the scores rank settings, the held-out ``validation.rms`` is the measure.
 """
 from __future__ import annotations
 
@@ -40,7 +43,8 @@ from . import filtering as _flt
 from .estimate import WEIGHTINGS
 from .regressors import coulomb, friction_columns, identification_regressor
 
-__all__ = ["FOLDS", "COULOMB_VELOCITIES", "COULOMB_START", "filtered_rows", "predict_rows", "cv_scores", "select"]
+__all__ = ["FOLDS", "COULOMB_VELOCITIES", "COULOMB_START", "CV_RATE_FACTOR", "CV_COARSE_FACTOR", "filtered_rows",
+           "predict_rows", "cv_scores", "select"]
 
 #: Contiguous blocks of the training part.
 FOLDS = 5
@@ -216,7 +220,8 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     dict
         ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``score``),
         ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
-        (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``, ``method`` (one paragraph), ``score`` (its meaning).
+        (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``,
+        ``best_score``, ``method`` (one paragraph), ``score`` (its meaning).
     """
     g = _flt.Grids.of(log) if grids is None else grids
     vs = tuple(coulomb_velocities) if "coulomb" in kinds else (0.0,)
