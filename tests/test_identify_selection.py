@@ -164,3 +164,41 @@ def test_panda_log_meets_the_issue_35_targets():
     assert np.all(rms <= [0.33, 0.44, 0.29, 0.46, 0.12, 0.13, 0.07]), rms
     assert np.all(rms <= 1.15 * np.array([0.30, 0.40, 0.26, 0.42, 0.107, 0.117, 0.063])), rms
     assert res.held_out_rms(res.x) == pytest.approx(rms, rel=1e-12)
+
+
+def test_cli_prints_and_records_the_choice_and_refuses_bad_settings(tmp_path, motion, capsys):
+    """The command prints the cross-validation's scores and the chosen settings; identified.json records
+    them (selection, friction_law, filter) and bounds.toml the Coulomb law and v_s; a negative
+    --coulomb-velocity, an unknown --weighting and a 20 Hz log (no cut-off of 2-20 Hz below its rate) are
+    refused in one line, exit 2, nothing written."""
+    import json
+
+    from rc3r.cli import main
+    from rc3r.identify.bounds_file import load_bounds
+    from rc3r.identify.log import Log, save_log
+
+    log, _ = sample_log(motion, seed=0)
+    path = tmp_path / "log.csv"
+    save_log(log, path)
+    out = tmp_path / "id"
+    assert main(["identify", str(path), "--robot", "rr3", "--no-consistency", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    data = json.loads((out / "identified.json").read_text())
+    sel, law, filt = data["selection"], data["friction_law"], data["filter"]
+    assert "cross-validation on the training part" in printed and "(cross-validation)" in printed
+    assert f"Coulomb tanh(qd / {law['coulomb_velocity']:g} rad/s)" in printed
+    assert (filt["cutoff_hz"], filt["velocities"], filt["weighting"], law["coulomb_velocity"]) == tuple(
+        sel["chosen"][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity"))
+    assert f"{sel['chosen']['score']:.4f}" in printed
+    ident = load_bounds(out / "bounds.toml")["identification"]
+    assert ident["coulomb_velocity"] == law["coulomb_velocity"] and "tanh" in ident["coulomb_law"]
+    for argv, match in ((["--coulomb-velocity", "-1"], "must be >= 0"), (["--weighting", "heavy"], "invalid choice")):
+        assert main(["identify", str(path), "--robot", "rr3", "--out", str(tmp_path / "o"), *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and match in err, err
+    slow = tmp_path / "slow.csv"
+    save_log(Log(log.t[::50], log.q[::50], log.tau[::50], log.qd[::50]), slow)
+    assert main(["identify", str(slow), "--robot", "rr3", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rc3r: error: ") and err.count("\n") == 1 and "too slow for any cut-off" in err, err
+    assert not (tmp_path / "o").exists()
