@@ -202,3 +202,37 @@ def test_cli_prints_and_records_the_choice_and_refuses_bad_settings(tmp_path, mo
     err = capsys.readouterr().err
     assert err.startswith("rc3r: error: ") and err.count("\n") == 1 and "too slow for any cut-off" in err, err
     assert not (tmp_path / "o").exists()
+
+
+def _resting(motion, arm, seconds: float):
+    """``motion`` followed by ``seconds`` at rest at its last position, held by the gravity torque."""
+    import pinocchio as pin
+
+    from rc3r.identify.synthetic import Motion
+
+    dt = motion.t[1] - motion.t[0]
+    K = int(round(seconds / dt))
+    q_end = motion.q[-1]
+    g = np.array(pin.rnea(arm.model, arm.model.createData(), q_end, np.zeros(arm.n), np.zeros(arm.n)))
+    zeros = np.zeros((K, arm.n))
+    return Motion(np.concatenate([motion.t, motion.t[-1] + dt * np.arange(1, K + 1)]),
+                  np.vstack([motion.q, np.tile(q_end, (K, 1))]), np.vstack([motion.qd, zeros]),
+                  np.vstack([motion.qdd, zeros]), np.vstack([motion.u, np.tile(g, (K, 1))]), motion.theta,
+                  motion.viscous, motion.coulomb, motion.label, motion.max_tracking_error)
+
+
+def test_an_arm_resting_through_the_held_out_part_is_predicted_at_the_noise_floor(arm, motion):
+    """The 3R's 10 s motion, then 4 s at rest (held by gravity: no friction acts); the last 30 % (mostly the
+    rest) held out; the stated sensor levels (0.2 N m torque noise). sign(qd) turns the velocity noise at
+    rest into a +-f_c (1 N m) square wave: held-out RMS at least 0.6 N m (3x the floor) per joint at the same cut-off,
+    source and weighting. The defaults' tanh(qd / v_s), v_s chosen by the cross-validation (> 0), keep
+    it within 1.5 x the noise floor."""
+    log, _ = sample_log(_resting(motion, arm, 4.0), seed=0)
+    res = identify(arm, log, consistency=False, test_fraction=0.3)
+    rms = np.asarray(res.validation["rms"])
+    assert np.all(rms <= 1.5 * 0.2), rms
+    assert res.friction_law["coulomb_velocity"] > 0 and res.friction_law["chosen"] == "cross-validation"
+    f = res.filter
+    sign = identify(arm, log, consistency=False, test_fraction=0.3, cutoff_hz=f["cutoff_hz"],
+                    velocities=f["velocities"], weighting=f["weighting"], coulomb_velocity=0.0)
+    assert np.all(np.asarray(sign.validation["rms"]) >= 0.6), sign.validation["rms"]
