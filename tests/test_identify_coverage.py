@@ -7,10 +7,10 @@ repeated 100 times. Each log is identified at a 2 Hz cut-off with differentiated
 weights and ``sign`` Coulomb friction (what the spectral rule chose before issue 35: 2-2.4 Hz on these
 logs), white covariance, 95 %; the true theta must lie inside its ellipsoid in about 95 % of them.
 
-Why not the cross-validated defaults: they choose 3-5 Hz on these logs (better held-out predictions),
-where the filtered residual holds in-band model misfit besides the sensor noise, so the white
-``sigma_j`` is 2-5 times the 0.2 N m noise and the ellipsoid is conservative: 100 % coverage, mean
-``d^T Cov^-1 d / p = 0.335`` over the same 100 logs (2026-12-06). The calibration this test checks is that
+Why not the cross-validated defaults: they choose 2-5 Hz on these logs, and at 3-5 Hz the filtered
+residual holds in-band model misfit (differentiated 16-bit encoder steps) besides the sensor noise, so
+the white ``sigma_j`` is 2-5 times the 0.2 N m noise and the ellipsoid is conservative: 100 % coverage,
+mean ``d^T Cov^-1 d / p = 0.462`` over the same 100 logs (2026-12-06, commit ec3582b). The calibration this test checks is that
 of the covariance model where its assumption (the filtered residual is the noise) holds.
 """
 from __future__ import annotations
