@@ -55,7 +55,8 @@ def add_parsers(sub, positive, lock) -> None:
                    help="friction columns per joint: comma-separated viscous, coulomb, offset, or none "
                         "(default all three)")
     i.add_argument("--filter", type=positive(), metavar="HZ",
-                   help="cut-off of the zero-phase low-pass [Hz] (default: chosen from the log's spectra)")
+                   help="cut-off of the zero-phase low-pass [Hz] (default: chosen by cross-validation on the "
+                        "training part among 2, 3, 5, 7, 10, 15, 20 Hz below the log's rate)")
     i.add_argument("--test-fraction", type=_fraction, default=0.2, metavar="F",
                    help="last fraction of the log held out for validation (default 0.2)")
     i.add_argument("--confidence", type=_fraction, default=0.95, metavar="C",
@@ -64,7 +65,12 @@ def add_parsers(sub, positive, lock) -> None:
                    help="white (default): from the in-band residual level; robust: also dominate the "
                         "spectral (Whittle) covariance, for coloured low-frequency residuals")
     i.add_argument("--velocities", choices=("auto", "logged", "differentiated"), default="auto",
-                   help="logged qd or differentiated q (default auto: the less noisy, from their spectra)")
+                   help="logged qd or differentiated q (default auto: chosen by cross-validation when qd is logged)")
+    i.add_argument("--weighting", choices=("auto", "ordinary", "per-joint"), default="auto",
+                   help="least squares: ordinary or weighted by per-joint noise (default auto: by cross-validation)")
+    i.add_argument("--coulomb-velocity", type=positive(float, allow_zero=True), metavar="RAD_S",
+                   help="smoothing velocity v_s of the Coulomb law f_c tanh(qd / v_s), 0 for sign(qd) "
+                        "(default: chosen by cross-validation among 0, 0.003, 0.01, 0.03, 0.1)")
     i.add_argument("--no-consistency", action="store_true", help="skip the physical-consistency SDP (cvxpy)")
     i.add_argument("--out", required=True, help="output directory (identified.json, bounds.toml, figures)")
     i.add_argument("--force", action="store_true", help="replace an earlier result in --out")
@@ -104,6 +110,7 @@ def _fmt(xs, digits: int = 3) -> str:
 
 def cmd_identify(args) -> int:
     """``rc3r identify LOG``: writes identified.json, bounds.toml, torque.png, residuals.png into --out."""
+    from ..identify._blas import blas_threads
     from ..identify.bounds_file import write_bounds
     from ..identify.figures import residual_figure, torque_figure
     from ..identify.log import load_log
@@ -118,15 +125,19 @@ def cmd_identify(args) -> int:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     robot = _robot(args)
     log = load_log(args.log, n=robot.n)  # no progress line: a refused log must leave one line on stderr
-    res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
-                   confidence=args.confidence, velocities=args.velocities, consistency=not args.no_consistency,
-                   covariance=args.covariance, seed=args.seed)
+    with blas_threads(1):  # narrow matrices: spinning BLAS threads cost more than they gain (identify._blas)
+        res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
+                       confidence=args.confidence, velocities=args.velocities,
+                       consistency=not args.no_consistency, covariance=args.covariance, seed=args.seed,
+                       weighting=args.weighting, coulomb_velocity=args.coulomb_velocity)
     prov = provenance(seed=args.seed)
     data = res.to_dict() | {"provenance": prov}
     lock = dict(args.lock) if args.lock else {}
     ident = {"log": str(Path(args.log).resolve()), "log_sha256": log.sha256, "cutoff_hz": res.filter["cutoff_hz"],
              "filter_chosen": res.filter["chosen"], "sigma": res.sigma.tolist(), "friction": list(res.friction_kinds),
-             "covariance": args.covariance, "quantile": res.ellipsoid["quantile"]}
+             "covariance": args.covariance, "quantile": res.ellipsoid["quantile"],
+             "velocities": res.filter["velocities"], "weighting": res.filter["weighting"],
+             "coulomb_law": res.friction_law["coulomb"], "coulomb_velocity": res.friction_law["coulomb_velocity"]}
     flat_prov = {"rc3r": prov["versions"]["rc3r"], "created": prov["created"], "command": " ".join(prov["command"]),
                  "git_commit": (prov.get("git") or {}).get("commit"), "git_dirty": (prov.get("git") or {}).get("dirty")}
     with output_dir(out, own=OWN_ENTRIES) as tmp:
@@ -139,7 +150,28 @@ def cmd_identify(args) -> int:
     v, f = res.validation, res.filter
     print(f"identified {robot.p} coefficients + {len(res.friction_kinds) * robot.n} friction terms of "
           f"{getattr(robot, 'robot_name', robot.name)} from {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s")
-    print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}; "
+    sel = res.selection
+    if sel is not None:
+        c, rows = sel["chosen"], sel["candidates"]
+        print(f"cross-validation on the training part ({sel['folds']} blocks, {len(rows)} settings; score = geometric "
+              "mean over joints of the held-out RMS vs logged torque [N m], best weighting per cell):")
+        v0 = sel["stage1_coulomb_velocity"]
+        first = [r for r in rows if v0 is None or r["coulomb_velocity"] == v0]
+        cuts = list(dict.fromkeys(r["cutoff_hz"] for r in first))
+        print(f"  {'cut-off [Hz]':>16}" + "".join(f"{fc:>8g}" for fc in cuts))
+        for vel in dict.fromkeys(r["velocities"] for r in first):
+            cell = [min((r["score"] for r in first if r["velocities"] == vel and r["cutoff_hz"] == fc), default=None)
+                    for fc in cuts]
+            print(f"  {vel:>16}" + "".join(f"{x:>8.4f}" if x is not None else f"{'-':>8}" for x in cell))
+        for w in dict.fromkeys(r["weighting"] for r in rows):
+            alt = [r for r in rows if r["cutoff_hz"] == c["cutoff_hz"] and r["velocities"] == c["velocities"]
+                   and r["weighting"] == w]
+            print(f"  {w:>9} at {c['cutoff_hz']:g} Hz, {c['velocities']}, by v_s [rad/s]: "
+                  + ", ".join(f"{r['coulomb_velocity']:g} {r['score']:.4f}" for r in sorted(
+                      alt, key=lambda r: r["coulomb_velocity"])))
+    law = res.friction_law
+    print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}, weighting "
+          f"{f['weighting']}, Coulomb tanh(qd / {law['coulomb_velocity']:g} rad/s); "
           f"{res.regressor['rows']} rows, condition number {res.regressor['condition_number']:.3g}")
     print(f"held-out rms [N m]: {_fmt(v['rms'])} (logged), {_fmt(v['rms_filtered'])} (low-passed), "
           f"{_fmt(v['rms_nominal'])} (the robot's own coefficients)")

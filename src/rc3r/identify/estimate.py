@@ -7,10 +7,14 @@ deviation ``sigma_j`` (per sample at the log's rate; drives and sensors differ p
 after the same filter.
 
 Estimate (:func:`weighted_least_squares`)
-    Ordinary least squares first; then ``sigma_j`` from the residuals and least squares again
-    with weights ``1/sigma_j``; twice. Solved by the normal equations of the column-scaled
-    weighted matrix (condition number at most :data:`COND_MAX`, checked first) with one step of
-    iterative refinement.
+    ``weighting="per-joint"``: ordinary least squares first; then ``sigma_j`` from the residuals
+    and least squares again with weights ``1/sigma_j``; twice. ``weighting="ordinary"``: ordinary
+    least squares only (``sigma_j`` still from its residuals, for the covariance). Which one
+    ``rc3r identify`` uses is chosen by cross-validation (:mod:`rc3r.identify.selection`): per-joint
+    weights are the Gauss--Markov choice when the residual is sensor noise, but they also shrink the
+    pull of the joints whose residual is mostly model error. Solved by the normal equations of the
+    column-scaled weighted matrix (condition number at most :data:`COND_MAX`, checked first) with
+    one step of iterative refinement.
 
 Noise and covariance
     The filtered noise is coloured, and what survives the filter need not be white either
@@ -28,7 +32,9 @@ Noise and covariance
     stamps), ``f_2`` the rows' rate (Whittle's approximation; exact when the noise's correlation
     dies out within ``N`` rows). For white noise ``S_j = 2 sigma_j^2 / f_s`` this is
     ``(1/D) (L Z)^T (L Z)`` (Parseval), and without filtering the Gauss--Markov
-    ``(A^T W A)^{-1}``. ``sigma_j`` reported is the white-equivalent level from the filtered
+    ``(A^T W A)^{-1}``; for ordinary least squares (``w_j = 1``) the white-noise sandwich is
+    ``H^{-1} (sum_j sigma_j^2 Z_j^T Z_j) H^{-1} / D``. ``sigma_j`` reported is the white-equivalent level
+    from the filtered
     residual: ``||r_j||^2 = sigma_j^2 (N G - m/(n D))`` with ``G`` the filter's noise gain
     (:func:`rc3r.identify.filtering.noise_gain`) and ``D`` the coarse grid's step.
 
@@ -53,11 +59,15 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["COND_MAX", "MOTION_MIN", "Fit", "check_excitation", "weighted_least_squares", "spectral_covariance",
+__all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit",
+           "check_excitation", "weighted_least_squares", "spectral_covariance",
            "dominating", "ellipsoid"]
 
 #: Largest condition number of the column-scaled regressor that still counts as full rank.
 COND_MAX = 1e6
+
+#: The least-squares weightings (:func:`weighted_least_squares`).
+WEIGHTINGS = ("ordinary", "per-joint")
 
 #: A joint whose filtered position range is below this [rad or m] does not move.
 MOTION_MIN = 1e-2
@@ -156,11 +166,13 @@ def _lstsq(A, y, w):
     return xs / scale, Hinv, scale, float(np.sqrt(lam[-1] / max(lam[0], 1e-300)))
 
 
-def weighted_least_squares(A, y, gain: float = 1.0, step: int = 1, iterations: int = 2) -> Fit:
+def weighted_least_squares(A, y, gain: float = 1.0, step: int = 1, iterations: int = 2,
+                           weighting: str = "per-joint") -> Fit:
     """Fit ``y`` (N, n) by ``A`` (N, n, m) (module docstring: weights, noise).
 
-    The covariance is the white-noise one, ``(sigma^2 / D)``-scaled ``H^{-1}``; replace it with
-    :func:`spectral_covariance` when the residual's spectrum is known.
+    The covariance is the white-noise one, ``(sigma^2 / D)``-scaled ``H^{-1}`` (per-joint weights) or
+    the sandwich (ordinary); replace it with :func:`spectral_covariance` when the residual's spectrum
+    is known.
 
     Parameters
     ----------
@@ -170,17 +182,23 @@ def weighted_least_squares(A, y, gain: float = 1.0, step: int = 1, iterations: i
         ``G``, the variance of the filter's output for unit white input (1: no filter).
     step : int
         ``D``, samples of the log per row.
+    iterations : int
+        Re-weightings after the ordinary fit (``weighting="per-joint"`` only).
+    weighting : str
+        ``"per-joint"`` (weights ``1/sigma_j``) or ``"ordinary"`` (all 1), :data:`WEIGHTINGS`.
     """
     A = np.asarray(A, dtype=float)
     y = np.asarray(y, dtype=float)
     N, n, m = A.shape
+    if weighting not in WEIGHTINGS:
+        raise ConfigError(f"weighting must be one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
     if N * n <= m:
         raise ConfigError(f"too few samples: {N} rows x {n} joints for {m} unknowns")
     dof = N * gain - m / (n * step)
     if dof <= 0:
         raise ConfigError(f"too few samples: {N} rows for {m} unknowns after filtering")
     w = np.ones(n)
-    for _ in range(iterations + 1):
+    for _ in range(iterations + 1 if weighting == "per-joint" else 0):
         x, Hinv, scale, cond = _lstsq(A, y, w)
         e = y - A @ x
         sigma = np.sqrt(np.sum(e ** 2, axis=0) / dof)
@@ -189,7 +207,12 @@ def weighted_least_squares(A, y, gain: float = 1.0, step: int = 1, iterations: i
     x, Hinv, scale, cond = _lstsq(A, y, w)
     e = y - A @ x
     sigma = np.sqrt(np.sum(e ** 2, axis=0) / dof)
-    cov = Hinv / np.outer(scale, scale) / step  # white-noise approximation (L ~ I on the band)
+    if weighting == "per-joint":
+        cov = Hinv / np.outer(scale, scale) / step  # white-noise approximation (L ~ I on the band)
+    else:
+        As = A / scale
+        B = sum(sigma[j] ** 2 * (As[:, j, :].T @ As[:, j, :]) for j in range(n))
+        cov = Hinv @ B @ Hinv / np.outer(scale, scale) / step
     return Fit(x, 0.5 * (cov + cov.T), sigma, N, cond, w)
 
 

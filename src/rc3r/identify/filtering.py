@@ -21,8 +21,11 @@ filter ``L`` applied to both sides: ``L[tau] = L[Phi] x``. rc3r fits that filter
    which jump where a velocity changes sign, are filtered at the full rate, then sampled.
 4. The first and last :data:`EDGE` ``/ f_c`` seconds are the filters' start-up: unused.
 5. Predictions of the **unfiltered** torques (held-out RMS, prediction bands) evaluate the model
-   at states low-passed at ``PREDICT_FACTOR x f_c`` (less differentiated encoder noise than the
-   fit's states, still all of the motion's band).
+   at states low-passed at the cut-off itself (``PREDICT_FACTOR = 1``): ``q`` (and the logged
+   ``qd``) zero-phase at ``f_c``, ``qd`` and ``qdd`` by central differences -- the states the fit
+   sees through ``L``, and FIGAROH's recipe for its states. (Until issue 35 they were low-passed
+   at ``2 f_c``, where ``qdd`` is mostly differentiated noise: 0.81-1.71 N m held out on the Panda
+   log instead of 0.32-0.44.)
 
 Why both sides: the torque of a real (or simulated) arm has content the low-passed states
 cannot reproduce (a velocity reversal under Coulomb friction kinks the motion). Comparing
@@ -31,7 +34,11 @@ residual, whose size grows as ``f_c`` falls; filtering both sides removes it at 
 and the fit uses the band below ``f_c`` where the motion is. The filtered noise is coloured,
 which :mod:`rc3r.identify.estimate` accounts for exactly (:func:`noise_gain`).
 
-Cut-off chosen from the data (:func:`choose_cutoff`)
+The default cut-off, velocity source, weighting and Coulomb smoothing are chosen by blocked
+cross-validation on the training part (:mod:`rc3r.identify.selection`) among
+:data:`CUTOFFS_HZ` that the log's rate allows (:func:`cutoff_candidates`).
+
+Spectral edges (:func:`choose_cutoff`; recorded for reference, no longer the default)
     For every joint, the power spectra (Welch) of the resampled ``q`` and ``tau`` are
     estimated from their second differences, divided by ``|2 sin(pi f / f_s)|^4``
     (differencing keeps the window's leakage from the large low-frequency peak out of the
@@ -51,13 +58,14 @@ never a bias, since both sides are filtered alike) and needs longer edges.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["ORDER", "EDGE", "STATE_FACTOR", "PREDICT_FACTOR", "COARSE_FACTOR", "FLOOR_BAND", "SIGNAL_OVER_FLOOR", "BELOW_PEAK", "EDGE_FACTOR",
+__all__ = ["ORDER", "EDGE", "STATE_FACTOR", "PREDICT_FACTOR", "CUTOFFS_HZ", "cutoff_candidates", "Grids",
+           "COARSE_FACTOR", "FLOOR_BAND", "SIGNAL_OVER_FLOOR", "BELOW_PEAK", "EDGE_FACTOR",
            "CUTOFF_RANGE", "uniform_grid", "resample", "lowpass", "spectrum_edges", "choose_cutoff",
            "velocity_source", "noise_gain", "effective_dof", "power_response", "residual_density", "Prepared", "prepare"]
 
@@ -70,8 +78,12 @@ EDGE = 3.0
 #: The states are low-passed at this multiple of the cut-off (so ``L`` alone shapes the band).
 STATE_FACTOR = 5.0
 
-#: Predictions of unfiltered torques (validation, bands) use states low-passed at this multiple of the cut-off.
-PREDICT_FACTOR = 2.0
+#: Predictions of unfiltered torques (validation, bands) use states low-passed at this multiple of the cut-off
+#: (1: the cut-off itself, consistent with the fit; module docstring, step 5).
+PREDICT_FACTOR = 1.0
+
+#: Cut-offs [Hz] the cross-validation chooses among (those the log's rate allows: :func:`cutoff_candidates`).
+CUTOFFS_HZ = (2.0, 3.0, 5.0, 7.0, 10.0, 15.0, 20.0)
 
 #: The arm's regressor is evaluated at no less than this multiple of the states' cut-off.
 COARSE_FACTOR = 10.0
@@ -90,6 +102,44 @@ EDGE_FACTOR = 1.0
 
 #: Range [Hz] the data-chosen cut-off is clipped to.
 CUTOFF_RANGE = (2.0, 20.0)
+
+
+def cutoff_candidates(fs: float, candidates=CUTOFFS_HZ) -> tuple:
+    """The ``candidates`` [Hz] a log sampled at ``fs`` allows: states' cut-off ``STATE_FACTOR f_c < 0.45 fs``.
+
+    A 1 kHz log allows all of :data:`CUTOFFS_HZ`, a 100 Hz log 2, 3, 5 and 7 Hz.
+    """
+    return tuple(float(f) for f in candidates if STATE_FACTOR * f < 0.45 * fs)
+
+
+@dataclass(frozen=True, eq=False)
+class Grids:
+    """A log resampled once on its uniform grid (``t`` (G,), ``q``, ``qd`` or None, ``tau`` (G, n), ``fs``).
+
+    :meth:`lowpass` remembers its results: the cross-validation prepares one log at many cut-offs
+    and velocity sources, which share most of their filtered signals.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray | None
+    tau: np.ndarray
+    fs: float
+    _memo: dict = field(default_factory=dict, repr=False)
+
+    def lowpass(self, name: str, fc: float) -> np.ndarray:
+        """:func:`lowpass` of the signal ``name`` (``"q"``, ``"qd"`` or ``"tau"``) at ``fc`` [Hz], remembered."""
+        key = (name, float(fc))
+        if key not in self._memo:
+            self._memo[key] = lowpass(getattr(self, name), self.fs, fc)
+        return self._memo[key]
+
+    @classmethod
+    def of(cls, log) -> "Grids":
+        """Resample ``log`` (:func:`uniform_grid`, :func:`resample`)."""
+        grid = uniform_grid(log.t)
+        return cls(grid, resample(log.t, log.q, grid), None if log.qd is None else resample(log.t, log.qd, grid),
+                   resample(log.t, log.tau, grid), 1.0 / (grid[1] - grid[0]))
 
 
 def uniform_grid(t, rate: float | None = None) -> np.ndarray:
@@ -247,7 +297,7 @@ class Prepared:
     friction_qd : ndarray (G, n)
         Velocities on the full grid (for the friction columns).
     predict : tuple of three ndarray (K, n)
-        ``q, qd, qdd`` low-passed at ``PREDICT_FACTOR x cutoff_hz`` (less noise), for predictions.
+        ``q, qd, qdd`` low-passed at ``PREDICT_FACTOR x cutoff_hz`` (the cut-off), for predictions.
     usable : ndarray of bool (K,)
         Outside the filters' start-up.
     fs, fs_coarse : float
@@ -255,6 +305,8 @@ class Prepared:
     cutoff_hz, state_cutoff_hz : float
     velocities : str
         ``"logged"`` or ``"differentiated"``.
+    tau_raw : ndarray (K, n)
+        The unfiltered torques (resampled) on the coarse grid (cross-validation scores).
     """
 
     t: np.ndarray
@@ -271,6 +323,7 @@ class Prepared:
     cutoff_hz: float
     state_cutoff_hz: float
     velocities: str
+    tau_raw: np.ndarray | None = None
 
     def filter_coarse(self, X) -> np.ndarray:
         """``L`` applied to columns ``X`` (K, ...) on the coarse grid."""
@@ -289,14 +342,17 @@ class Prepared:
         return noise_gain(self.fs, self.cutoff_hz)
 
 
-def prepare(log, cutoff_hz: float, velocities: str = "auto", floors: dict | None = None) -> Prepared:
-    """Resample and filter ``log`` for the fit at cut-off ``cutoff_hz`` (module docstring, steps 1-4).
+def prepare(log, cutoff_hz: float, velocities: str = "auto", floors: dict | None = None,
+            grids: Grids | None = None, coarse_factor: float = COARSE_FACTOR) -> Prepared:
+    """Resample and filter ``log`` for the fit at cut-off ``cutoff_hz`` (module docstring, steps 1-5).
 
     ``velocities``: ``"auto"`` (:func:`velocity_source` from ``floors`` = ``{"q": ..., "qd": ...}``,
-    else differentiated), ``"logged"`` or ``"differentiated"``.
+    else differentiated), ``"logged"`` or ``"differentiated"``. ``grids``: ``Grids.of(log)`` when
+    already computed (the cross-validation prepares one log many times). ``coarse_factor``: the
+    coarse grid's rate is at least this multiple of the states' cut-off (:data:`COARSE_FACTOR`).
     """
-    grid = uniform_grid(log.t)
-    fs = 1.0 / (grid[1] - grid[0])
+    g = Grids.of(log) if grids is None else grids
+    grid, fs = g.t, g.fs
     fsc = STATE_FACTOR * cutoff_hz
     if not fsc < 0.45 * fs:
         raise ConfigError(f"filter cut-off {cutoff_hz:g} Hz is too high for a log sampled at {fs:.4g} Hz "
@@ -307,16 +363,15 @@ def prepare(log, cutoff_hz: float, velocities: str = "auto", floors: dict | None
     if velocities == "logged" and log.qd is None:
         raise ConfigError(f"log {log.source} has no velocities (qd1..qdn) to use")
     dt = 1.0 / fs
-    qf = lowpass(resample(log.t, log.q, grid), fs, fsc)
-    qdf = (lowpass(resample(log.t, log.qd, grid), fs, fsc) if velocities == "logged"
-           else np.gradient(qf, dt, axis=0))
+    qf = g.lowpass("q", fsc)
+    qdf = g.lowpass("qd", fsc) if velocities == "logged" else np.gradient(qf, dt, axis=0)
     qddf = np.gradient(qdf, dt, axis=0)
-    step = max(1, int(np.floor(fs / (COARSE_FACTOR * fsc))))
+    step = max(1, int(np.floor(fs / (coarse_factor * fsc))))
     fp = PREDICT_FACTOR * cutoff_hz
-    qp = lowpass(resample(log.t, log.q, grid), fs, fp)
-    qdp = (lowpass(resample(log.t, log.qd, grid), fs, fp) if velocities == "logged" else np.gradient(qp, dt, axis=0))
+    qp = g.lowpass("q", fp)
+    qdp = g.lowpass("qd", fp) if velocities == "logged" else np.gradient(qp, dt, axis=0)
     predict = (qp[::step], qdp[::step], np.gradient(qdp, dt, axis=0)[::step])
-    tau_f = lowpass(resample(log.t, log.tau, grid), fs, cutoff_hz)
+    tau_f = g.lowpass("tau", cutoff_hz)
     tc = grid[::step]
     edge = EDGE / cutoff_hz
     usable = (tc >= grid[0] + edge) & (tc <= grid[-1] - edge)
@@ -324,4 +379,4 @@ def prepare(log, cutoff_hz: float, velocities: str = "auto", floors: dict | None
         raise ConfigError(f"log {log.source} lasts {grid[-1] - grid[0]:.3g} s: too short for a filter at "
                           f"{cutoff_hz:g} Hz, whose start-up takes {edge:.3g} s at each end")
     return Prepared(tc, qf[::step], qdf[::step], qddf[::step], tau_f[::step], qdf, predict, usable, fs, fs / step, step,
-                    float(cutoff_hz), float(fsc), velocities)
+                    float(cutoff_hz), float(fsc), velocities, g.tau[::step])

@@ -2,21 +2,29 @@ r"""The identification pipeline: from a log to theta, friction, covariance, vali
 
 :func:`identify` runs, in order:
 
-1. the cut-off: given, or chosen from the log's spectra (:func:`rc3r.identify.filtering.choose_cutoff`),
-   and the velocity source (logged or differentiated, :func:`~rc3r.identify.filtering.velocity_source`);
-2. resampling and parallel filtering (:func:`~rc3r.identify.filtering.prepare`), the regressor
-   ``[Y | friction]`` (:mod:`rc3r.identify.regressors`) low-passed like the torques;
-3. the split: the first ``1 - F`` of the log's duration trains, the last ``F`` is held out (the
+1. the split: the first ``1 - F`` of the log's duration trains, the last ``F`` is held out (the
    filters run over the whole log once; their start-up at both ends is unused);
-4. the excitation check, weighted least squares with per-joint noise and the covariance
-   (:mod:`rc3r.identify.estimate`), the confidence ellipsoid of theta and the ball and box
-   containing it;
-5. held-out validation at the logged time stamps: RMS of ``tau - Phi x`` per joint against the
-   logged torques (``rms``) and of ``L[tau] - L[Phi] x`` against the low-passed ones
+2. the settings: cut-off, velocity source (logged or differentiated), weighting (ordinary or
+   per-joint noise) and Coulomb smoothing velocity, each given or chosen by blocked
+   cross-validation on the training part only (:func:`rc3r.identify.selection.select`; the
+   scores behind the choice are kept in ``selection``);
+3. resampling and parallel filtering (:func:`~rc3r.identify.filtering.prepare`), the regressor
+   ``[Y | friction]`` (:mod:`rc3r.identify.regressors`) low-passed like the torques;
+4. the excitation check, the least squares and the covariance (:mod:`rc3r.identify.estimate`),
+   the confidence ellipsoid of theta and the ball and box containing it;
+5. held-out validation at the logged time stamps: the model evaluated at the states low-passed at
+   the cut-off (``q`` and logged ``qd`` zero-phase at ``f_c``, derivatives by central
+   differences: consistent with the fit), RMS of ``tau - Phi x`` per joint against the torques
+   **as logged** (``rms``), and of ``L[tau] - L[Phi] x`` against the low-passed ones
    (``rms_filtered``), the fraction of logged torques inside the prediction band at the
    confidence level, and the RMS of the robot's own (URDF) coefficients without friction
    (``rms_nominal``) for comparison;
 6. physical consistency (:mod:`rc3r.identify.consistency`), if asked.
+
+Evaluating another coefficient vector exactly like the fit's: :meth:`Identification.held_out_rms`
+(``x`` of the same unknowns, e.g. a physically consistent estimate) uses the stored held-out
+regressor ``held_out["rows"]`` (N, n, m: the rows of step 5 at the held-out logged stamps) and
+the logged torques ``held_out["tau"]`` (N, n); ``held_out_rms(res.x) == validation["rms"]``.
 """
 from __future__ import annotations
 
@@ -27,7 +35,8 @@ import numpy as np
 from ..errors import ConfigError
 from . import estimate as _est
 from . import filtering as _flt
-from .regressors import FRICTION_KINDS, friction_names
+from . import selection as _sel
+from .regressors import COULOMB_LAW, FRICTION_KINDS, friction_names
 
 __all__ = ["Identification", "identify", "MAX_RAW_STAMPS"]
 
@@ -54,6 +63,20 @@ class Identification:
     log: dict
     consistency: dict | None
     held_out: dict = field(repr=False)
+    selection: dict | None = None
+    friction_law: dict = field(default_factory=dict)
+
+    def held_out_rms(self, x=None) -> np.ndarray:
+        """Held-out RMS per joint (n,) [N m] of coefficients ``x`` (m,) against the logged torques.
+
+        Evaluated exactly as ``validation["rms"]`` (module docstring, step 5) from the stored
+        ``held_out["rows"]`` and ``held_out["tau"]``; ``x`` defaults to the fit's.
+        """
+        x = self.x if x is None else np.asarray(x, dtype=float)
+        if x.shape != self.x.shape:
+            raise ConfigError(f"x has shape {x.shape}, the identification's unknowns {self.x.shape}")
+        r = self.held_out["tau"] - self.held_out["rows"] @ x
+        return np.sqrt(np.mean(r ** 2, axis=0))
 
     @property
     def theta(self) -> np.ndarray:
@@ -99,35 +122,29 @@ class Identification:
             "regressor": self.regressor,
             "log": self.log,
             "consistency": self.consistency,
+            "friction_law": self.friction_law,
+            "selection": self.selection,
         }
 
 
-def _raw_rows(robot, prep, t, kinds, predict: bool = False) -> np.ndarray:
+def _raw_rows(robot, prep, t, kinds, predict: bool = False, v_s: float = 0.0) -> np.ndarray:
     """Unfiltered regressor ``[Y | friction]`` (N, n, m) at stamps ``t`` from the fit's (or prediction) states."""
     from .regressors import identification_regressor
 
     states = prep.predict if predict else (prep.q, prep.qd, prep.qdd)
     at = [np.column_stack([np.interp(t, prep.t, X[:, j]) for j in range(X.shape[1])]) for X in states]
-    return identification_regressor(robot, *at, kinds)
+    return identification_regressor(robot, *at, kinds, v_s)
 
 
-def _filtered_rows(robot, prep, kinds) -> np.ndarray:
-    """``L[Y | friction]`` (K, n, m) on the coarse grid (friction filtered at the full rate)."""
-    Y = np.asarray(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd), dtype=float)
-    LY = prep.filter_coarse(Y)
-    n = prep.q.shape[1]
-    qd = prep.friction_qd
-    cols = {"viscous": qd, "coulomb": np.sign(qd), "offset": np.ones_like(qd)}
-    LF = np.zeros((LY.shape[0], n, n * len(kinds)))
-    idx = np.arange(n)
-    for k, kind in enumerate(kinds):
-        LF[:, idx, k * n + idx] = prep.filter_full(cols[kind])[:LY.shape[0]]
-    return np.concatenate([LY, LF], axis=2)
+def _filtered_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
+    """``L[Y | friction]`` (K, n, m) on the coarse grid (:func:`rc3r.identify.selection.filtered_rows`)."""
+    return _sel.filtered_rows(robot, prep, kinds, v_s)
 
 
 def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: float | None = None,
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
-             consistency: bool = True, covariance: str = "white", seed: int = 0) -> Identification:
+             consistency: bool = True, covariance: str = "white", seed: int = 0, weighting: str = "auto",
+             coulomb_velocity: float | None = None, folds: int = _sel.FOLDS) -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
 
     Parameters
@@ -139,13 +156,15 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     friction : sequence of str
         Kinds of :data:`~rc3r.identify.regressors.FRICTION_KINDS`.
     cutoff_hz : float, optional
-        The parallel filter's cut-off; default chosen from the data.
+        The parallel filter's cut-off; default chosen by cross-validation among
+        :func:`~rc3r.identify.filtering.cutoff_candidates`.
     test_fraction : float
         Held-out fraction F of the log's duration, ``0 < F < 1``.
     confidence : float
         Level of the ellipsoid and of the prediction band.
     velocities : str
-        ``"auto"``, ``"logged"`` or ``"differentiated"``.
+        ``"auto"`` (cross-validated between logged and differentiated when ``qd`` is logged,
+        else differentiated), ``"logged"`` or ``"differentiated"``.
     consistency : bool
         Run the physical-consistency SDP (needs cvxpy).
     covariance : str
@@ -154,6 +173,13 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         (:func:`~rc3r.identify.estimate.dominating`), for logs with coloured low-frequency residuals.
     seed : int
         Seed of the random states of the consistency check's standard-parameter map.
+    weighting : str
+        ``"auto"`` (cross-validated), ``"ordinary"`` or ``"per-joint"``.
+    coulomb_velocity : float, optional
+        The Coulomb smoothing velocity ``v_s`` [rad/s] (0: ``sign``); default cross-validated among
+        :data:`~rc3r.identify.selection.COULOMB_VELOCITIES`.
+    folds : int
+        Blocks of the cross-validation.
     """
     kinds = tuple(k for k in FRICTION_KINDS if k in tuple(friction))
     if log.n != robot.n:
@@ -162,23 +188,46 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         raise ConfigError(f"test fraction must be between 0 and 1 (exclusive), got {test_fraction}")
     if not 0.0 < confidence < 1.0:
         raise ConfigError(f"confidence must be between 0 and 1 (exclusive), got {confidence}")
-    grid = _flt.uniform_grid(log.t)
-    fs = 1.0 / (grid[1] - grid[0])
+    if covariance not in ("white", "robust"):
+        raise ConfigError(f"covariance must be 'white' or 'robust', got {covariance!r}")
+    if weighting != "auto" and weighting not in _est.WEIGHTINGS:
+        raise ConfigError(f"weighting must be auto, {', '.join(_est.WEIGHTINGS)}, got {weighting!r}")
+    if velocities not in ("auto", "logged", "differentiated"):
+        raise ConfigError(f"velocities must be auto, logged or differentiated, got {velocities!r}")
+    if velocities == "logged" and log.qd is None:
+        raise ConfigError(f"log {log.source} has no velocities (qd1..qdn) to use")
+    if coulomb_velocity is not None and not coulomb_velocity >= 0:
+        raise ConfigError(f"Coulomb smoothing velocity must be >= 0, got {coulomb_velocity:g}")
+    grids = _flt.Grids.of(log)
+    grid, fs = grids.t, grids.fs
     if grid.size < 4 * 3.0 * fs / _flt.CUTOFF_RANGE[1]:
         raise ConfigError(f"log {log.source} lasts {grid[-1] - grid[0]:.3g} s: too short to identify from")
-    q_grid = _flt.resample(log.t, log.q, grid)
-    choice = _flt.choose_cutoff(q_grid, _flt.resample(log.t, log.tau, grid), fs)
-    floors = {"q": choice["position_floor"]}
-    if log.qd is not None:
-        floors["qd"] = _flt.spectrum_edges(_flt.resample(log.t, log.qd, grid), fs)[1].tolist()
-    if cutoff_hz is None:
-        fc, chosen = choice["cutoff_hz"], "from the data"
-    else:
-        fc, chosen = float(cutoff_hz), "given (--filter)"
-    prep = _flt.prepare(log, fc, velocities, floors)
-    A = _filtered_rows(robot, prep, kinds)
     t0, t1 = float(log.t[0]), float(log.t[-1])
     t_split = t0 + (1.0 - test_fraction) * (t1 - t0)
+    if cutoff_hz is None:
+        cutoffs = _flt.cutoff_candidates(fs)
+        if not cutoffs:
+            raise ConfigError(f"log {log.source} is sampled at {fs:.4g} Hz: too slow for any cut-off of "
+                              f"{', '.join(f'{f:g}' for f in _flt.CUTOFFS_HZ)} Hz; give --filter HZ "
+                              f"(at most {0.45 * fs / _flt.STATE_FACTOR:.3g} Hz)")
+    else:
+        cutoffs = (float(cutoff_hz),)
+    vels = (("logged", "differentiated") if log.qd is not None else ("differentiated",)) \
+        if velocities == "auto" else (velocities,)
+    weights = _est.WEIGHTINGS if weighting == "auto" else (weighting,)
+    v_cands = _sel.COULOMB_VELOCITIES if coulomb_velocity is None else (float(coulomb_velocity),)
+    if "coulomb" not in kinds:
+        v_cands = (0.0 if coulomb_velocity is None else float(coulomb_velocity),)
+    sel = None
+    if max(len(cutoffs), len(vels), len(weights), len(v_cands)) > 1:
+        sel = _sel.select(robot, log, kinds, t_split, cutoffs, vels, weights, v_cands, grids=grids, folds=folds)
+        c = sel["chosen"]
+        fc, vel, wgt, v_s = c["cutoff_hz"], c["velocities"], c["weighting"], c["coulomb_velocity"]
+    else:
+        fc, vel, wgt, v_s = cutoffs[0], vels[0], weights[0], v_cands[0]
+    chosen = "given (--filter)" if cutoff_hz is not None else "cross-validation"
+    prep = _flt.prepare(log, fc, vel, grids=grids)
+    A = _filtered_rows(robot, prep, kinds, v_s)
     train = prep.usable & (prep.t <= t_split)
     test = prep.usable & (prep.t > t_split)
     if not test.any():
@@ -186,28 +235,27 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
                           f"start-up ({_flt.EDGE / fc:.3g} s); give a longer log or a larger --test-fraction")
     names = tuple(robot.coefficient_names) + friction_names(kinds, robot.n)
     _est.check_excitation(A[train], names, prep.q[train])
-    fit = _est.weighted_least_squares(A[train], prep.tau[train], gain=prep.noise_gain, step=prep.step)
+    fit = _est.weighted_least_squares(A[train], prep.tau[train], gain=prep.noise_gain, step=prep.step,
+                                      weighting=wgt)
     # the unfiltered residual at the training stamps (evenly thinned): its spectrum sets the covariance
     edge = _flt.EDGE / fc
     ok = (log.t >= t0 + edge) & (log.t <= grid[-1] - edge)
     tr_idx = np.nonzero(ok & (log.t <= t_split))[0]
     tr_idx = tr_idx[np.unique(np.linspace(0, tr_idx.size - 1, min(tr_idx.size, MAX_RAW_STAMPS)).astype(int))]
-    raw_res = log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds) @ fit.x
-    sigma_raw = np.sqrt(np.mean((log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds, True) @ fit.x) ** 2,
-                                axis=0))
+    raw_res = log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds, v_s=v_s) @ fit.x
+    sigma_raw = np.sqrt(np.mean((log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds, True, v_s) @ fit.x)
+                                ** 2, axis=0))
     density = _flt.residual_density(log.t[tr_idx], raw_res, fc, prep.fs)
     parts = {"white": fit.cov, "spectral": _est.spectral_covariance(A[train], fit.weights, prep.fs_coarse, density)}
     if covariance == "robust":
         fit = replace(fit, cov=_est.dominating(parts["white"], parts["spectral"]))
-    elif covariance != "white":
-        raise ConfigError(f"covariance must be 'white' or 'robust', got {covariance!r}")
     p = robot.p
     nu = robot.n * _flt.effective_dof(int(fit.rows), prep.fs_coarse, fc) - len(names)
     ell = _est.ellipsoid(fit.cov[:p, :p], confidence, dof=max(nu, 1.5))
     te_idx = np.nonzero(ok & (log.t > t_split))[0]
     if te_idx.size == 0:
         raise ConfigError("no held-out time stamps outside the filter's start-up; give a longer log")
-    R_te = _raw_rows(robot, prep, log.t[te_idx], kinds, True)
+    R_te = _raw_rows(robot, prep, log.t[te_idx], kinds, True, v_s)
     pred = R_te @ fit.x
     tau_te = log.tau[te_idx]
     half = fit.band(R_te, sigma_raw, confidence)
@@ -220,13 +268,21 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         "rms_nominal": np.sqrt(np.mean((tau_te - nominal) ** 2, axis=0)).tolist(),
         "inside_band": float(inside.mean()), "inside_band_per_joint": inside.mean(axis=0).tolist(),
         "band_confidence": float(confidence),
-        "meaning": "rms: held-out logged torques minus the model at the filtered states [N m]; rms_filtered: "
-                   "the same after the parallel low-pass; rms_nominal: the robot's own coefficients, no "
-                   "friction; inside_band: fraction of held-out logged torques within the prediction band",
+        "meaning": "rms: held-out torques as logged minus the model at the states low-passed at the cut-off "
+                   "(q and logged qd zero-phase at f_c, derivatives by central differences), at the logged "
+                   "stamps [N m]; rms_filtered: the same after the parallel low-pass; rms_nominal: the robot's "
+                   "own coefficients, no friction; inside_band: fraction of held-out logged torques within the "
+                   "prediction band",
     }
     filt = {"cutoff_hz": fc, "chosen": chosen, "order": _flt.ORDER, "kind": "Butterworth, zero phase (sosfiltfilt)",
-            "state_cutoff_hz": prep.state_cutoff_hz, "edge_s": edge, "rate_hz": fs, "coarse_rate_hz": prep.fs_coarse,
-            "velocities": prep.velocities, "data_choice": choice}
+            "state_cutoff_hz": prep.state_cutoff_hz, "predict_cutoff_hz": _flt.PREDICT_FACTOR * fc, "edge_s": edge,
+            "rate_hz": fs, "coarse_rate_hz": prep.fs_coarse, "velocities": prep.velocities,
+            "velocities_chosen": "cross-validation" if len(vels) > 1 else
+            ("given (--velocities)" if velocities != "auto" else "not logged"),
+            "weighting": wgt, "weighting_chosen": "cross-validation" if len(weights) > 1 else "given (--weighting)"}
+    law = {"coulomb": COULOMB_LAW, "coulomb_velocity": float(v_s),
+           "chosen": "cross-validation" if len(v_cands) > 1 else
+           ("given (--coulomb-velocity)" if coulomb_velocity is not None else "no Coulomb term")}
     lam = np.linalg.eigvals(np.linalg.solve(parts["white"], parts["spectral"])).real
     reg = {"rows": int(fit.rows), "unknowns": len(names), "condition_number": fit.cond,
            "covariance": {"method": covariance, "spectral_over_white": [float(lam.min()), float(lam.max())],
@@ -237,7 +293,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         from .consistency import check_consistency
 
         cons = check_consistency(robot, fit.x[:p], fit.cov[:p, :p], ell["chi2"], seed=seed)
-    held = {"t": log.t[te_idx], "tau": tau_te, "pred": pred, "band": half, "covariances": parts}
+    held = {"t": log.t[te_idx], "tau": tau_te, "pred": pred, "band": half, "covariances": parts, "rows": R_te}
     return Identification(robot.describe() | {"coefficient_names": list(robot.coefficient_names)},
                           tuple(robot.coefficient_names), kinds, fit.x, fit.cov, p, fit.sigma, sigma_raw, ell,
-                          filt, validation, reg, log.describe(), cons, held)
+                          filt, validation, reg, log.describe(), cons, held, sel, law)

@@ -5,7 +5,7 @@ The logged torque of joint ``j`` is modelled as
 .. math::
 
     \tau_j = \bigl[Y(q, \dot q, \dot q, \ddot q)\,\theta\bigr]_j
-             + f_{v,j}\,\dot q_j + f_{c,j}\,\mathrm{sign}(\dot q_j) + f_{0,j},
+             + f_{v,j}\,\dot q_j + f_{c,j}\,\tanh(\dot q_j / v_s) + f_{0,j},
 
 with ``Y`` the robot's regressor in its own coefficients (:meth:`Robot.regressor` with
 ``v = qd``, ``a = qdd``: the inverse-dynamics regressor), viscous ``f_v`` [N m s/rad],
@@ -13,6 +13,15 @@ Coulomb ``f_c`` [N m] and a constant offset ``f_0`` [N m] (a torque sensor's bia
 static load the model lacks). Each friction kind adds one column per joint, nonzero
 only in that joint's row. :data:`FRICTION_KINDS` lists them in the order their columns
 follow ``theta``: for every kind, joints 1..n.
+
+The Coulomb law is smooth: ``tanh(qd / v_s)`` with a smoothing velocity ``v_s`` [rad/s] (``v_s = 0``
+is ``sign(qd)``). ``sign`` flips with every zero crossing of velocity noise while a joint rests or
+reverses, putting a full ``+-f_c`` square wave into the regressor that the torque does not show;
+``tanh`` keeps the law's ``+-f_c`` plateaus away from rest and lets noise-level velocities give
+noise-level friction. ``rc3r identify`` chooses ``v_s`` by cross-validation
+(:mod:`rc3r.identify.selection`) and records it (``friction_law`` in identified.json,
+``coulomb_velocity`` in bounds.toml's ``[identification]``) so that models and plants use the same
+law (:func:`coulomb`).
 """
 from __future__ import annotations
 
@@ -20,10 +29,22 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["FRICTION_KINDS", "parse_friction", "friction_names", "friction_columns", "identification_regressor"]
+__all__ = ["FRICTION_KINDS", "coulomb", "COULOMB_LAW", "parse_friction", "friction_names", "friction_columns",
+           "identification_regressor"]
 
 #: Friction kinds and the prefix of their coefficient names.
 FRICTION_KINDS = {"viscous": "fv", "coulomb": "fc", "offset": "f0"}
+
+#: The Coulomb law, as recorded in identified.json and bounds.toml.
+COULOMB_LAW = "f_c tanh(qd / v_s) (sign(qd) when v_s = 0)"
+
+
+def coulomb(qd, v_s: float = 0.0) -> np.ndarray:
+    """The Coulomb column ``tanh(qd / v_s)`` (``sign(qd)`` for ``v_s = 0``) of velocities ``qd`` [rad/s]."""
+    qd = np.asarray(qd, dtype=float)
+    if v_s < 0:
+        raise ConfigError(f"Coulomb smoothing velocity must be >= 0, got {v_s:g}")
+    return np.sign(qd) if v_s == 0 else np.tanh(qd / float(v_s))
 
 
 def parse_friction(text) -> tuple[str, ...]:
@@ -44,22 +65,22 @@ def friction_names(kinds, n: int) -> tuple[str, ...]:
     return tuple(f"{FRICTION_KINDS[k]}{j}" for k in kinds for j in range(1, n + 1))
 
 
-def friction_columns(qd, kinds) -> np.ndarray:
-    """Friction regressor (N, n, n * len(kinds)) of velocities ``qd`` (N, n)."""
+def friction_columns(qd, kinds, v_s: float = 0.0) -> np.ndarray:
+    """Friction regressor (N, n, n * len(kinds)) of velocities ``qd`` (N, n); Coulomb by :func:`coulomb`."""
     qd = np.atleast_2d(np.asarray(qd, dtype=float))
     N, n = qd.shape
     out = np.zeros((N, n, n * len(kinds)))
     idx = np.arange(n)
     for k, kind in enumerate(kinds):
-        val = qd if kind == "viscous" else np.sign(qd) if kind == "coulomb" else np.ones_like(qd)
+        val = qd if kind == "viscous" else coulomb(qd, v_s) if kind == "coulomb" else np.ones_like(qd)
         out[:, idx, k * n + idx] = val
     return out
 
 
-def identification_regressor(robot, q, qd, qdd, kinds) -> np.ndarray:
-    """``[Y(q, qd, qd, qdd) | friction]``, shape (N, n, p + n len(kinds))."""
+def identification_regressor(robot, q, qd, qdd, kinds, v_s: float = 0.0) -> np.ndarray:
+    """``[Y(q, qd, qd, qdd) | friction]``, shape (N, n, p + n len(kinds)); ``v_s``: :func:`coulomb`."""
     q, qd, qdd = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd))
     Y = np.asarray(robot.regressor(q, qd, qd, qdd), dtype=float)
     if Y.ndim == 2:
         Y = Y[None]
-    return np.concatenate([Y, friction_columns(qd, kinds)], axis=2)
+    return np.concatenate([Y, friction_columns(qd, kinds, v_s)], axis=2)

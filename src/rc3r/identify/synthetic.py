@@ -20,7 +20,8 @@ experiment repeated gives the same motion and new noise.
 at a nominal 1 kHz). At each time the motion is interpolated (``q`` quintic Hermite from
 ``q, qd, qdd`` at the steps, ``qd`` cubic Hermite, ``u`` cubic spline; errors below 1e-9 of
 the signals for the default step) and recorded as a real log would: ``q`` quantized by the
-encoder (``2 pi / encoder_counts``), ``qd`` plus white noise (or not logged), ``tau = u +``
+encoder (``2 pi / encoder_counts``), ``qd`` (optionally ``velocity_lag`` s late) plus white noise
+(or not logged), ``tau = u +``
 a constant sensor offset per joint ``+`` white noise. Every random draw comes from
 ``numpy.random.default_rng(seed)`` in a fixed order (time stamps, velocity noise, torque noise).
 """
@@ -62,6 +63,9 @@ class SensorNoise:
         Chance that an interval is a gap instead (a late sample).
     gap : (float, float)
         Gap length range [s].
+    velocity_lag : float
+        The logged velocities are those of this many seconds earlier [s] (a drive's filtered
+        velocity estimate lags; 0: none).
     """
 
     torque_std: float | tuple = 0.2
@@ -72,6 +76,7 @@ class SensorNoise:
     jitter: tuple = (0.7, 1.3)
     gap_probability: float = 0.005
     gap: tuple = (2e-3, 9e-3)
+    velocity_lag: float = 0.0
 
     def describe(self) -> dict:
         """JSON-ready levels."""
@@ -215,6 +220,8 @@ def sample_log(motion: Motion, seed: int = 0, noise: SensorNoise = SensorNoise()
     offset = np.broadcast_to(np.asarray(noise.torque_offset, float), (n,)).copy()
     tstd = np.broadcast_to(np.asarray(noise.torque_std, float), (n,)).copy()
     step = 2.0 * math.pi / noise.encoder_counts
+    if noise.velocity_lag > 0:
+        qd = _hermite(motion, np.maximum(t - noise.velocity_lag, motion.t[0]))[1]
     vel = qd + rng.normal(0.0, noise.velocity_std, qd.shape)
     tau = u + offset + rng.normal(0.0, 1.0, u.shape) * tstd
     log = Log(t, np.round(q / step) * step, tau, vel if log_velocities else None,

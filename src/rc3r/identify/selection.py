@@ -1,0 +1,290 @@
+r"""The identification's settings chosen by blocked cross-validation on the training part of a log.
+
+What is chosen (:func:`select`), among what the log allows:
+
+* the cut-off ``f_c`` of the parallel filter, among :data:`~rc3r.identify.filtering.CUTOFFS_HZ`
+  below the log's rate (:func:`~rc3r.identify.filtering.cutoff_candidates`: 2-20 Hz at 1 kHz,
+  2-7 Hz at 100 Hz);
+* the velocity source, logged ``qd`` or differentiated ``q`` (both only when ``qd`` is logged: a log
+  whose velocities lag its positions, e.g. a 100 Hz log of a filtered velocity estimate, scores
+  worse with them and gets the differentiated ones);
+* the weighting of the least squares, ordinary or per-joint noise
+  (:data:`~rc3r.identify.estimate.WEIGHTINGS`);
+* the Coulomb smoothing velocity ``v_s`` of ``tanh(qd / v_s)`` among :data:`COULOMB_VELOCITIES`
+  (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``).
+
+How a setting is scored. The training part (the log's first ``1 - F``, outside the filters'
+start-up) is cut into :data:`FOLDS` contiguous blocks of equal duration. For every block, the
+model is fitted exactly as :func:`rc3r.identify.pipeline.identify` fits it (the parallel-filtered
+rows ``L[Phi] x = L[tau]``, the same weighting) on the other blocks, leaving out a guard of
+``GUARD / f_c`` seconds on each side of the block (the zero-phase filter's reach: without it the
+fitted ``L[tau]`` would carry the block's own noise), and predicts the block's **logged**
+(unfiltered, resampled) torques at the states low-passed at ``f_c``: the held-out prediction of
+:mod:`rc3r.identify.pipeline`, on training data. The score of a setting is the geometric mean
+over the joints of the per-joint RMS pooled over the blocks [N m] (every joint counts alike,
+whatever its torque scale); the lowest wins.
+
+The search is in two stages, to keep ``rc3r identify`` fast: (1) every cut-off x velocity source x
+weighting at ``v_s =`` :data:`COULOMB_START`; (2) every ``v_s`` x weighting at the chosen cut-off
+and source. The cross-validation's coarse grid is coarser than the final fit's
+(:data:`CV_COARSE_FACTOR`), and its rows are thinned to a rate of at least :data:`CV_RATE_FACTOR`
+``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
+segments (computed once per setting), so the folds and weightings cost little beyond building the
+regressor once per cut-off and source. The fold's fit is the final fit's estimator (checked against
+:func:`~rc3r.identify.estimate.weighted_least_squares` in the tests), but the final fit's rows are
+on its own, finer grid: the scores rank settings, the held-out ``validation.rms`` is the measure.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ConfigError
+from . import filtering as _flt
+from .estimate import WEIGHTINGS
+from .regressors import coulomb, friction_columns, identification_regressor
+
+__all__ = ["FOLDS", "GUARD", "COULOMB_VELOCITIES", "COULOMB_START", "CV_RATE_FACTOR", "CV_COARSE_FACTOR",
+           "filtered_rows",
+           "predict_rows", "cv_scores", "select"]
+
+#: Contiguous blocks of the training part.
+FOLDS = 5
+
+#: Coulomb smoothing velocities ``v_s`` [rad/s] the cross-validation chooses among (0: ``sign(qd)``).
+COULOMB_VELOCITIES = (0.0, 0.003, 0.01, 0.03, 0.1)
+
+#: ``v_s`` [rad/s] of the first stage (cut-off, velocity source, weighting).
+COULOMB_START = 0.01
+
+#: The cross-validation's rows are thinned to a rate of at least this multiple of the cut-off (the filtered rows'
+#: products, whose sums are the Gram matrices, hold nothing above ``2 f_c``: sampled at ``10 f_c`` their sums are
+#: the full grid's to the filter's stop-band level).
+CV_RATE_FACTOR = 10.0
+
+#: The cross-validation's coarse grid runs at no less than this multiple of the states' cut-off ``5 f_c``
+#: (the final fit: :data:`~rc3r.identify.filtering.COARSE_FACTOR`, 10): the arm's regressor, evaluated there
+#: and low-passed at ``f_c``, aliases only content from above ``19 f_c`` into the band, where the states'
+#: filter has removed all but 2e-5 of it.
+CV_COARSE_FACTOR = 4.0
+
+#: Guard [in units of ``1 / f_c`` s] left out of a block's fit on each side of the block. The zero-phase
+#: Butterworth's impulse response decays as ``exp(-2 pi sin(pi / 8) f_c t)`` = ``exp(-2.4 f_c t)``: 2.7 % of its
+#: peak after ``1.5 / f_c``. (``3 / f_c``, the start-up :data:`~rc3r.identify.filtering.EDGE`, starved the
+#: folds' fits at 2 Hz on a 10 s log: scores 4x the held-out RMS, 2 Hz never chosen.)
+GUARD = 1.5
+
+#: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
+ITERATIONS = 2
+
+
+def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dict | None = None) -> np.ndarray:
+    """``L[Y | friction]`` (K, n, m) on the coarse grid (friction filtered at the full rate).
+
+    ``arm_rows``: ``L[Y]`` (K, n, p) when already computed (only the friction columns depend on
+    ``v_s``); ``memo``: a dict that keeps the filtered viscous and offset columns between calls on
+    the same ``prep``.
+    """
+    LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd)) if arm_rows is None else arm_rows
+    n = prep.q.shape[1]
+    qd = prep.friction_qd
+    LF = np.zeros((LY.shape[0], n, n * len(kinds)))
+    idx = np.arange(n)
+    memo = {} if memo is None else memo
+    for k, kind in enumerate(kinds):
+        if kind == "coulomb":
+            col = prep.filter_full(coulomb(qd, v_s))
+        else:
+            if kind not in memo:
+                memo[kind] = prep.filter_full(qd if kind == "viscous" else np.ones_like(qd))
+            col = memo[kind]
+        LF[:, idx, k * n + idx] = col[:LY.shape[0]]
+    return np.concatenate([np.asarray(LY, dtype=float), LF], axis=2)
+
+
+def predict_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
+    """``[Y | friction]`` (K, n, m) on the coarse grid at the prediction states (low-passed at the cut-off)."""
+    return identification_regressor(robot, *prep.predict, kinds, v_s)
+
+
+def _solve(G, b, w) -> np.ndarray:
+    """``argmin sum_j w_j^2 ||y_j - A_j x||^2`` from per-joint Gram ``G`` (n, m, m) and ``b`` (n, m)."""
+    w2 = np.asarray(w, dtype=float) ** 2
+    H = np.einsum("j,jkl->kl", w2, G)
+    r = w2 @ b
+    d = np.sqrt(np.diag(H))
+    d[d == 0] = 1.0
+    try:
+        return np.linalg.solve(H / np.outer(d, d), r / d) / d
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(H / np.outer(d, d), r / d, rcond=None)[0] / d
+
+
+def _fit(G, b, yy, weighting: str) -> np.ndarray:
+    """The fit of :func:`~rc3r.identify.estimate.weighted_least_squares` from per-joint sums."""
+    n = G.shape[0]
+    w = np.ones(n)
+    x = _solve(G, b, w)
+    if weighting == "per-joint":
+        for _ in range(ITERATIONS + 1):
+            rss = yy - 2.0 * np.einsum("jk,k->j", b, x) + np.einsum("k,jkl,l->j", x, G, x)
+            sig = np.sqrt(np.maximum(rss, 1e-300))
+            w = 1.0 / np.maximum(sig, 1e-12 * max(1.0, float(sig.max())))
+            x = _solve(G, b, w)
+    return x
+
+
+def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS) -> dict:
+    """Blocked cross-validation RMS per joint of a fit of ``y ~ A x`` predicting ``tau`` by ``P x`` (module docstring).
+
+    Parameters
+    ----------
+    A, P : ndarray (K, n, m)
+        The fit's filtered rows and the prediction rows on one grid of times ``t`` (K,).
+    y, tau : ndarray (K, n)
+        The filtered torques and the logged (unfiltered) ones there.
+    train : ndarray of bool (K,)
+        The rows that may be used (training part, outside the filters' start-up).
+    fc : float
+        The cut-off [Hz]: a guard of ``GUARD / fc`` s about each block is left out of its fit.
+    weightings : sequence of str
+        Scored alike on the same folds.
+    folds : int
+        Contiguous blocks.
+
+    Returns
+    -------
+    dict
+        ``{weighting: (n,) RMS [N m]}`` (``inf`` when a fold leaves too few rows to fit).
+    """
+    idx = np.nonzero(train)[0]
+    K, n, m = A.shape
+    tt = t[idx]
+    edges = np.linspace(tt[0], tt[-1], folds + 1)
+    guard = GUARD / fc
+    cuts = np.unique(np.clip(np.concatenate([edges, edges - guard, edges + guard]), tt[0], tt[-1]))
+    S = cuts.size - 1
+    bounds = np.searchsorted(tt, cuts[1:-1], side="right")  # rows are in time order: segments are slices
+    starts, stops = np.concatenate([[0], bounds]), np.concatenate([bounds, [tt.size]])
+    G = np.zeros((S, n, m, m))
+    bb = np.zeros((S, n, m))
+    yy = np.zeros((S, n))
+    count = stops - starts
+    At = np.ascontiguousarray(np.moveaxis(A[idx], 1, 0))  # (n, N, m): one contiguous block per joint
+    yt = np.ascontiguousarray(y[idx].T)
+    for j in range(n):
+        nz = np.nonzero(np.any(At[j] != 0.0, axis=0))[0]  # a joint's row: most columns are zero
+        Aj = np.ascontiguousarray(At[j][:, nz])
+        for s in range(S):
+            a, b = starts[s], stops[s]
+            if b > a:
+                G[s, j][np.ix_(nz, nz)] = Aj[a:b].T @ Aj[a:b]
+                bb[s, j, nz] = Aj[a:b].T @ yt[j, a:b]
+                yy[s, j] = yt[j, a:b] @ yt[j, a:b]
+    mid = 0.5 * (cuts[:-1] + cuts[1:])
+    fold_of = np.clip(np.searchsorted(edges, tt, side="right") - 1, 0, folds - 1)
+    del At
+    sse = {w: np.zeros(n) for w in weightings}
+    rows = 0
+    for i in range(folds):
+        use = (mid < edges[i] - guard) | (mid > edges[i + 1] + guard)
+        if count[use].sum() * n <= 2 * m:
+            return {w: np.full(n, np.inf) for w in weightings}
+        val = idx[fold_of == i]
+        rows += val.size
+        for w in weightings:
+            x = _fit(G[use].sum(axis=0), bb[use].sum(axis=0), yy[use].sum(axis=0), w)
+            sse[w] += np.sum((tau[val] - P[val] @ x) ** 2, axis=0)
+    return {w: np.sqrt(sse[w] / rows) for w in weightings}
+
+
+def _score(rms) -> float:
+    """Geometric mean over joints of the per-joint RMS [N m]."""
+    rms = np.asarray(rms, dtype=float)
+    return float(np.exp(np.mean(np.log(np.maximum(rms, 1e-300))))) if np.all(np.isfinite(rms)) else float("inf")
+
+
+def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, coulomb_velocities,
+           grids=None, folds: int = FOLDS) -> dict:
+    """Choose cut-off, velocity source, weighting and Coulomb smoothing by cross-validation (module docstring).
+
+    Parameters
+    ----------
+    robot, log :
+        As :func:`rc3r.identify.pipeline.identify`.
+    kinds : tuple of str
+        Friction kinds (``v_s`` is only searched when ``"coulomb"`` is among them).
+    t_split : float
+        End of the training part [s].
+    cutoffs, velocities, weightings, coulomb_velocities : sequence
+        The candidates (one each: given, not searched).
+    grids : rc3r.identify.filtering.Grids, optional
+        The log resampled once.
+    folds : int
+        Contiguous blocks of the training part.
+
+    Returns
+    -------
+    dict
+        ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``score``),
+        ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
+        (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``,
+        ``best_score``, ``method`` (one paragraph), ``score`` (its meaning).
+    """
+    g = _flt.Grids.of(log) if grids is None else grids
+    vs = tuple(coulomb_velocities) if "coulomb" in kinds else (0.0,)
+    v0 = COULOMB_START if COULOMB_START in vs else vs[len(vs) // 2]
+    rows = []
+    best = None
+    cache = {}
+
+    def run(fc, vel, v_s, weights):
+        prep, LY, PY, th, memo = cache[(fc, vel)]
+        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY, memo=memo)[th]
+        P = np.concatenate([PY, friction_columns(prep.predict[1][th], kinds, v_s)], axis=2)
+        train = (prep.usable & (prep.t <= t_split))[th]
+        res = cv_scores(A, prep.tau[th], P, prep.tau_raw[th], prep.t[th], train, fc, weights, folds)
+        out = []
+        for w in weights:
+            row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
+                   "rms": [float(r) for r in res[w]], "score": _score(res[w])}
+            rows.append(row)
+            out.append(row)
+        return out
+
+    multi = len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
+    for vel in velocities:
+        for fc in cutoffs:
+            prep = _flt.prepare(log, fc, vel, grids=g, coarse_factor=CV_COARSE_FACTOR)
+            LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd))
+            th = slice(None, None, max(1, int(np.floor(prep.fs_coarse / (CV_RATE_FACTOR * fc)))))
+            qp, qdp, qddp = (X[th] for X in prep.predict)
+            PY = np.asarray(robot.regressor(qp, qdp, qdp, qddp), dtype=float)
+            cache = {(fc, vel): (prep, LY, PY, th, {})}
+            stage1 = vs if not multi else (v0,)
+            for v_s in stage1:
+                for row in run(fc, vel, v_s, weightings):
+                    if best is None or row["score"] < best[0]["score"]:
+                        best = (row, cache[(fc, vel)])
+    if best is None or not np.isfinite(best[0]["score"]):
+        raise ConfigError(f"log {log.source}: too short to cross-validate the filter ({folds} blocks of the "
+                          "training part); give a longer log or --filter, --velocities, --weighting")
+    if multi:
+        fc, vel = best[0]["cutoff_hz"], best[0]["velocities"]
+        cache = {(fc, vel): best[1]}
+        for v_s in vs:
+            if v_s != v0:
+                for row in run(fc, vel, v_s, weightings):
+                    if row["score"] < best[0]["score"]:
+                        best = (row, best[1])
+    chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "score")}
+    lo = min(float(r["score"]) for r in rows)
+    return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
+            "stage1_coulomb_velocity": float(v0) if multi else None,
+            "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
+                       "logged torques predicted (states low-passed at the cut-off) by the parallel-filtered fit "
+                       f"on the other blocks, less a guard of {GUARD:g} / f_c s at each side of the block; "
+                       + ("stage 1: every cut-off x velocity source x weighting at v_s = "
+                          f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source"
+                          if multi else "every candidate setting")),
+            "score": "geometric mean over joints of the per-joint held-out RMS pooled over the blocks [N m]; "
+                     "lowest wins"}

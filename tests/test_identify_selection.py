@@ -1,0 +1,240 @@
+"""rc3r identify's settings chosen by cross-validation, and its held-out evaluation (issue 35).
+
+Synthetic logs come from rc3r's simulator of the paper's 3R (:mod:`rc3r.identify.synthetic`, every draw
+seeded); the real one is a Franka Panda log (Gaz et al., RA-L 2019; GPL-3, not in this repository), looked
+for as ``$RC3R_SHARED_DATA/panda_gaz/exciting_traj_1.npz`` or ``shared/data/panda_gaz`` beside the repository
+(or beside its parent or grandparent: a git worktree); the tests that need it skip without it.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rc3r
+from rc3r.errors import ConfigError
+from rc3r.identify import filtering as F
+from rc3r.identify import selection as S
+from rc3r.identify.estimate import weighted_least_squares
+from rc3r.identify.excitation import random_fourier
+from rc3r.identify.pipeline import identify
+from rc3r.identify.regressors import coulomb, friction_columns
+from rc3r.identify.synthetic import SensorNoise, sample_log, simulate_motion
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _panda_log() -> Path | None:
+    roots = [Path(os.environ["RC3R_SHARED_DATA"])] if os.environ.get("RC3R_SHARED_DATA") else []
+    roots += [up / "shared" / "data" for up in REPO.parents[:3]]
+    for root in roots:
+        if (root / "panda_gaz" / "exciting_traj_1.npz").is_file():
+            return root / "panda_gaz" / "exciting_traj_1.npz"
+    return None
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return rc3r.load_robot("rr3")
+
+
+@pytest.fixture(scope="module")
+def motion(arm):
+    """10 s of the paper's 3R on a random Fourier trajectory (5 harmonics of 0.1 Hz, at rest at both ends)."""
+    return simulate_motion(arm, random_fourier(arm, 10.0, seed=2, fill=0.8), 10.0)
+
+
+def test_cutoff_candidates_respect_the_logs_rate():
+    """The states are low-passed at 5 f_c, which must stay below 0.45 f_s: a 100 Hz log allows 2-7 Hz, a
+    1 kHz or 5 kHz log all of 2-20 Hz, a 20 Hz log none (refused in one line by identify)."""
+    assert F.cutoff_candidates(100.0) == (2.0, 3.0, 5.0, 7.0)
+    assert F.cutoff_candidates(1000.0) == F.CUTOFFS_HZ == F.cutoff_candidates(5000.0)
+    assert F.cutoff_candidates(20.0) == ()
+
+
+def test_coulomb_law_is_tanh_with_sign_as_its_limit():
+    """tanh(qd / v_s): odd, +-1 far from rest, qd / v_s near it; v_s = 0 is sign(qd); the friction columns use it."""
+    qd = np.array([-1.0, -1e-3, 0.0, 1e-3, 1.0])
+    assert coulomb(qd, 0.0).tolist() == [-1.0, -1.0, 0.0, 1.0, 1.0]
+    c = coulomb(qd, 0.01)
+    assert c[[0, 4]] == pytest.approx([-1.0, 1.0], abs=1e-12)
+    assert c[3] == pytest.approx(np.tanh(0.1)) and c[1] == -c[3] and c[2] == 0.0
+    cols = friction_columns(qd[:, None], ("coulomb",), 0.01)
+    assert cols[:, 0, 0] == pytest.approx(c)
+    with pytest.raises(ConfigError):
+        coulomb(qd, -1.0)
+
+
+def test_fold_fit_from_gram_sums_is_the_pipelines_least_squares():
+    """The cross-validation's fit (normal equations from per-joint Gram sums, S._fit) equals
+    estimate.weighted_least_squares on the same rows, ordinary and per-joint weighted (random rows with
+    per-joint noise 0.1, 1, 3; seed 0): the folds score the estimator identify uses."""
+    rng = np.random.default_rng(0)
+    N, n, m = 400, 3, 6
+    A = rng.normal(size=(N, n, m))
+    y = A @ rng.normal(size=m) + rng.normal(size=(N, n)) * np.array([0.1, 1.0, 3.0])
+    G = np.einsum("tjk,tjl->jkl", A, A)
+    b = np.einsum("tjk,tj->jk", A, y)
+    yy = np.einsum("tj,tj->j", y, y)
+    for w in ("ordinary", "per-joint"):
+        ref = weighted_least_squares(A, y, weighting=w).x
+        assert S._fit(G, b, yy, w) == pytest.approx(ref, rel=1e-8, abs=1e-10), w
+    assert not np.allclose(S._fit(G, b, yy, "ordinary"), S._fit(G, b, yy, "per-joint"), rtol=1e-3)
+
+
+def test_ordinary_least_squares_is_numpys_and_its_covariance_the_sandwich():
+    """weighting='ordinary': x is numpy's lstsq; with per-joint noise 0.1, 1, 3 its covariance is the sandwich
+    H^-1 (sum_j sigma_j^2 A_j^T A_j) H^-1, which for the quiet joint's unknown is not the pooled sigma^2 H^-1."""
+    rng = np.random.default_rng(1)
+    N, n, m = 2000, 3, 3
+    A = np.zeros((N, n, m))
+    A[:, np.arange(n), np.arange(n)] = rng.normal(size=(N, n))  # unknown j only in joint j's rows
+    sig = np.array([0.1, 1.0, 3.0])
+    y = A @ np.ones(m) + rng.normal(size=(N, n)) * sig
+    fit = weighted_least_squares(A, y, weighting="ordinary")
+    assert fit.x == pytest.approx(np.linalg.lstsq(A.reshape(-1, m), y.ravel(), rcond=None)[0], rel=1e-10)
+    expect = fit.sigma ** 2 / np.einsum("tjj->j", np.einsum("tjk,tjl->tkl", A, A).sum(axis=0)[None])
+    assert np.sqrt(np.diag(fit.cov)) == pytest.approx(np.sqrt(expect), rel=1e-6)
+
+
+def test_held_out_rms_is_the_torque_noise_floor(arm, motion):
+    """Held-out evaluation consistent with the fit. Noise-free torques (16-bit encoder, 0.01 rad/s velocity
+    noise) at a 5 Hz cut-off (differentiated velocities, per-joint weights, v_s = 0.01 rad/s): the model at
+    the states low-passed at 5 Hz predicts the logged torques to at most 0.15 N m per joint (what it cannot
+    reproduce: differentiated encoder steps, the motion's content above the band); at states low-passed at
+    2 f_c, the evaluation before issue 35, 0.25-0.44 N m. With 0.6 N m of white torque noise the defaults'
+    held-out RMS is the noise floor, 0.95-1.1 x 0.6 per joint. held_out_rms(x) reproduces validation.rms
+    and grows for another x."""
+    quiet, _ = sample_log(motion, seed=1, noise=SensorNoise(torque_std=0.0))
+    r0 = identify(arm, quiet, consistency=False, cutoff_hz=5.0, velocities="differentiated", weighting="per-joint",
+                  coulomb_velocity=0.01)
+    assert np.all(np.asarray(r0.validation["rms"]) <= 0.15), r0.validation["rms"]
+    noisy, _ = sample_log(motion, seed=1, noise=SensorNoise(torque_std=0.6))
+    res = identify(arm, noisy, consistency=False)
+    rms = np.asarray(res.validation["rms"])
+    assert np.all(rms >= 0.95 * 0.6) and np.all(rms <= 1.1 * 0.6), rms
+    assert res.held_out_rms(res.x) == pytest.approx(rms, rel=1e-12)
+    other = res.x * 1.05
+    assert np.all(res.held_out_rms(other) > rms)
+    with pytest.raises(ConfigError):
+        res.held_out_rms(res.x[:-1])
+
+
+def test_cross_validation_prefers_differentiated_velocities_when_the_logged_ones_lag(arm, motion):
+    """A 100 Hz log with a coarse 12-bit encoder and clean logged velocities (1e-4 rad/s): the CV takes the
+    logged ones; the same log whose velocities lag the positions by 30 ms: differentiated. Only 2-7 Hz
+    cut-offs are tried at 100 Hz, and the scores behind the choice are recorded."""
+    chosen = {}
+    for lag in (0.0, 0.03):
+        noise = SensorNoise(period=0.01, velocity_lag=lag, torque_std=0.05, velocity_std=1e-4, encoder_counts=2 ** 12)
+        log, _ = sample_log(motion, seed=1, noise=noise)
+        res = identify(arm, log, consistency=False)
+        sel = res.selection
+        assert {r["cutoff_hz"] for r in sel["candidates"]} <= {2.0, 3.0, 5.0, 7.0}
+        assert min(r["score"] for r in sel["candidates"]) == sel["chosen"]["score"]
+        assert res.filter["velocities"] == sel["chosen"]["velocities"]
+        chosen[lag] = sel["chosen"]["velocities"]
+    assert chosen == {0.0: "logged", 0.03: "differentiated"}
+
+
+def test_given_settings_skip_the_search(arm, motion):
+    """With cut-off, velocities, weighting and v_s all given, no cross-validation runs and they are used."""
+    log, _ = sample_log(motion, seed=0)
+    res = identify(arm, log, cutoff_hz=3.0, velocities="differentiated", weighting="ordinary",
+                   coulomb_velocity=0.0, consistency=False)
+    assert res.selection is None
+    assert (res.filter["cutoff_hz"], res.filter["velocities"], res.filter["weighting"]) == (3.0, "differentiated",
+                                                                                          "ordinary")
+    assert res.friction_law["coulomb_velocity"] == 0.0 and res.filter["chosen"] == "given (--filter)"
+
+
+def test_panda_log_meets_the_issue_35_targets():
+    """The real Panda log, defaults, last 30 % held out: RMS vs logged torque at most 0.33 0.44 0.29 0.46 0.12
+    0.13 0.07 N m (issue 35's done-when; plain OLS at 5 Hz: 0.30 0.40 0.26 0.42 0.107 0.117 0.063, SOURCE.md of
+    the shared data), and within 15 % of that OLS on every joint."""
+    path = _panda_log()
+    if path is None:
+        pytest.skip("the shared Panda log (RC3R_SHARED_DATA or ../shared/data/panda_gaz) is absent")
+    from rc3r.identify.log import load_log
+    from rc3r.robots.pinocchio import PinocchioRobot
+
+    robot = PinocchioRobot.named("panda")
+    res = identify(robot, load_log(path, n=robot.n), test_fraction=0.3, consistency=False)
+    rms = np.asarray(res.validation["rms"])
+    assert np.all(rms <= [0.33, 0.44, 0.29, 0.46, 0.12, 0.13, 0.07]), rms
+    assert np.all(rms <= 1.15 * np.array([0.30, 0.40, 0.26, 0.42, 0.107, 0.117, 0.063])), rms
+    assert res.held_out_rms(res.x) == pytest.approx(rms, rel=1e-12)
+
+
+def test_cli_prints_and_records_the_choice_and_refuses_bad_settings(tmp_path, motion, capsys):
+    """The command prints the cross-validation's scores and the chosen settings; identified.json records
+    them (selection, friction_law, filter) and bounds.toml the Coulomb law and v_s; a negative
+    --coulomb-velocity, an unknown --weighting and a 20 Hz log (no cut-off of 2-20 Hz below its rate) are
+    refused in one line, exit 2, nothing written."""
+    import json
+
+    from rc3r.cli import main
+    from rc3r.identify.bounds_file import load_bounds
+    from rc3r.identify.log import Log, save_log
+
+    log, _ = sample_log(motion, seed=0)
+    path = tmp_path / "log.csv"
+    save_log(log, path)
+    out = tmp_path / "id"
+    assert main(["identify", str(path), "--robot", "rr3", "--no-consistency", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    data = json.loads((out / "identified.json").read_text())
+    sel, law, filt = data["selection"], data["friction_law"], data["filter"]
+    assert "cross-validation on the training part" in printed and "(cross-validation)" in printed
+    assert f"Coulomb tanh(qd / {law['coulomb_velocity']:g} rad/s)" in printed
+    assert (filt["cutoff_hz"], filt["velocities"], filt["weighting"], law["coulomb_velocity"]) == tuple(
+        sel["chosen"][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity"))
+    assert f"{sel['chosen']['score']:.4f}" in printed
+    ident = load_bounds(out / "bounds.toml")["identification"]
+    assert ident["coulomb_velocity"] == law["coulomb_velocity"] and "tanh" in ident["coulomb_law"]
+    for argv, match in ((["--coulomb-velocity", "-1"], "must be >= 0"), (["--weighting", "heavy"], "invalid choice")):
+        assert main(["identify", str(path), "--robot", "rr3", "--out", str(tmp_path / "o"), *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and match in err, err
+    slow = tmp_path / "slow.csv"
+    save_log(Log(log.t[::50], log.q[::50], log.tau[::50], log.qd[::50]), slow)
+    assert main(["identify", str(slow), "--robot", "rr3", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rc3r: error: ") and err.count("\n") == 1 and "too slow for any cut-off" in err, err
+    assert not (tmp_path / "o").exists()
+
+
+def _resting(motion, arm, seconds: float):
+    """``motion`` followed by ``seconds`` at rest at its last position, held by the gravity torque."""
+    import pinocchio as pin
+
+    from rc3r.identify.synthetic import Motion
+
+    dt = motion.t[1] - motion.t[0]
+    K = int(round(seconds / dt))
+    q_end = motion.q[-1]
+    g = np.array(pin.rnea(arm.model, arm.model.createData(), q_end, np.zeros(arm.n), np.zeros(arm.n)))
+    zeros = np.zeros((K, arm.n))
+    return Motion(np.concatenate([motion.t, motion.t[-1] + dt * np.arange(1, K + 1)]),
+                  np.vstack([motion.q, np.tile(q_end, (K, 1))]), np.vstack([motion.qd, zeros]),
+                  np.vstack([motion.qdd, zeros]), np.vstack([motion.u, np.tile(g, (K, 1))]), motion.theta,
+                  motion.viscous, motion.coulomb, motion.label, motion.max_tracking_error)
+
+
+def test_an_arm_resting_through_the_held_out_part_is_predicted_at_the_noise_floor(arm, motion):
+    """The 3R's 10 s motion, then 4 s at rest (held by gravity: no friction acts); the last 30 % (mostly the
+    rest) held out; the stated sensor levels (0.2 N m torque noise). sign(qd) turns the velocity noise at
+    rest into a +-f_c (1 N m) square wave: held-out RMS at least 0.6 N m (3x the floor) per joint at the same cut-off,
+    source and weighting. The defaults' tanh(qd / v_s), v_s chosen by the cross-validation (> 0), keep
+    it within 1.75 x the noise floor (what the low-passed model misses of the moving part remains)."""
+    log, _ = sample_log(_resting(motion, arm, 4.0), seed=0)
+    res = identify(arm, log, consistency=False, test_fraction=0.3)
+    rms = np.asarray(res.validation["rms"])
+    assert np.all(rms <= 1.75 * 0.2), rms
+    assert res.friction_law["coulomb_velocity"] > 0 and res.friction_law["chosen"] == "cross-validation"
+    f = res.filter
+    sign = identify(arm, log, consistency=False, test_fraction=0.3, cutoff_hz=f["cutoff_hz"],
+                    velocities=f["velocities"], weighting=f["weighting"], coulomb_velocity=0.0)
+    assert np.all(np.asarray(sign.validation["rms"]) >= 0.6), sign.validation["rms"]
