@@ -53,7 +53,6 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.identify.log``                  logs (CSV, NPZ): loading and validation
 ``rc3r.identify.filtering``            resampling, zero-phase (parallel) low-pass, differentiation, cut-off candidates
 ``rc3r.identify.selection``            cut-off, velocity source, weighting, Coulomb smoothing by blocked cross-validation
-``rc3r.identify._blas``                one OpenBLAS thread for a block of code (narrow matrices on a busy machine)
 ``rc3r.identify.regressors``           identification regressor: the arm's Y and per-joint friction columns
 ``rc3r.identify.estimate``             weighted least squares, per-joint noise, covariance, confidence ellipsoid
 ``rc3r.identify.consistency``          physical consistency: SDP on the pseudo-inertia matrices (cvxpy)

@@ -110,7 +110,8 @@ def _fmt(xs, digits: int = 3) -> str:
 
 def cmd_identify(args) -> int:
     """``rc3r identify LOG``: writes identified.json, bounds.toml, torque.png, residuals.png into --out."""
-    from ..identify._blas import blas_threads
+    from threadpoolctl import threadpool_limits
+
     from ..identify.bounds_file import write_bounds
     from ..identify.figures import residual_figure, torque_figure
     from ..identify.log import load_log
@@ -125,7 +126,9 @@ def cmd_identify(args) -> int:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     robot = _robot(args)
     log = load_log(args.log, n=robot.n)  # no progress line: a refused log must leave one line on stderr
-    with blas_threads(1):  # narrow matrices: spinning BLAS threads cost more than they gain (identify._blas)
+    # Narrow matrices (20-70 columns): spinning BLAS threads cost more than they gain on a busy machine
+    # (the Panda log: 49 s with two OpenBLAS threads, 25 s with one, 2 cores at a load of 8, 2026-12-06).
+    with threadpool_limits(limits=1, user_api="blas"):
         res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
                        confidence=args.confidence, velocities=args.velocities,
                        consistency=not args.no_consistency, covariance=args.covariance, seed=args.seed,
