@@ -63,6 +63,7 @@ import numpy as np
 from numba import njit
 
 from .._trig import sincos
+from ._report import _REPORT, _progress
 from ..robots.rr3 import kernels as K
 
 __all__ = ["run_bench", "TARGETS"]
@@ -138,14 +139,6 @@ def _forward_dynamics_in_loop(th, Q, QD, U, l2, g0, out):
 
 
 # ---- small utilities --------------------------------------------------------------------
-
-
-#: Where progress messages go; :func:`run_bench` sets it (the command line prints them).
-_REPORT = [lambda msg: None]
-
-
-def _progress(msg: str) -> None:
-    _REPORT[0](msg)
 
 
 def _time(fn, repeats: int) -> tuple[float, float]:
