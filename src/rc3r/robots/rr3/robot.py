@@ -17,12 +17,9 @@ from ..base import Robot
 from . import model as _model
 from . import regressor as _reg
 from . import engine as _engine
-from .params import STD_NAMES, ArmParams, physical_issues, table1, theta, theta_from_vector
+from .params import PARAM_NAMES, ArmParams, physical_issues, table1, theta, theta_from_vector
 
 __all__ = ["RR3", "PARAM_NAMES", "COEFFICIENT_NAMES"]
-
-#: Names of the 30 standard parameters (``m1, rcx1, ..., Iyz3``), vector order.
-PARAM_NAMES = tuple(f"{name}{k}" for k in (1, 2, 3) for name in STD_NAMES)
 
 #: Names of the 15 coefficients (paper order, section 3.1.1).
 COEFFICIENT_NAMES = tuple(f"theta{i}" for i in range(1, 16))
