@@ -29,8 +29,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "rc3r"
 #: never one above. A module belongs to the layer of the longest prefix that names it. Written
 #: once, here; docs/architecture.md ("Layers") reads the same.
 LAYERS = (
-    # foundations: errors, file formats, the numba cache, compiled trigonometry
-    ("rc3r.errors", "rc3r.io", "rc3r._numba_cache", "rc3r._trig"),
+    # foundations: errors, shared orders and names, file formats, the numba cache, compiled trigonometry
+    ("rc3r.errors", "rc3r.conventions", "rc3r.io", "rc3r._numba_cache", "rc3r._trig"),
     # plain numerics every layer above may use
     ("rc3r.trajectory", "rc3r.plotting"),
     # identification from logs knows no robot class: it works on regressors and arrays

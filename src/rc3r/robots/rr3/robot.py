@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ...simulate._fast import CompiledSimulator
 from ..base import Robot
 from . import model as _model
 from . import regressor as _reg
@@ -44,9 +43,6 @@ class RR3(Robot):
     name = "rr3"
     #: What theta's entries are (``verify-model`` prints it).
     theta_order = "paper order, section 3.1.1"
-    #: The compiled engine instantiated on this arm's kernel supply (:mod:`.engine`).
-    fast_engine = CompiledSimulator(_engine.ENGINE)
-
     @property
     def compiled_kernels(self) -> tuple[str, np.ndarray]:
         """``(module, kc)``: the kernel supply :mod:`.engine` and its constants ``[theta, l2, g0]``."""
