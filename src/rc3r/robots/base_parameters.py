@@ -53,7 +53,7 @@ import numpy as np
 from ..conventions import STD_KEYS
 from ..errors import UrdfError
 
-__all__ = ["STD_KEYS", "ZERO_RTOL", "RANK_RTOL", "INDEPENDENCE_TOL", "K_ATOL", "IDENTIFIABILITY_RTOL",
+__all__ = ["ZERO_RTOL", "RANK_RTOL", "INDEPENDENCE_TOL", "K_ATOL", "IDENTIFIABILITY_RTOL",
            "BaseParameters", "standard_parameter_names", "standard_regressor_stack", "base_parameters",
            "identifiability", "physical_issues", "check_model"]
 

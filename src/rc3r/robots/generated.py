@@ -83,7 +83,7 @@ from .generated_chain import FUNCTIONS, Chain
 from .generated_sym import _functions, _wrapper
 from .pinocchio_kernel import local_axis
 
-__all__ = ["GeneratedKernels", "FUNCTIONS", "DEFAULT_FLAGS", "default_cache_dir", "chain_constants"]
+__all__ = ["GeneratedKernels", "DEFAULT_FLAGS", "default_cache_dir", "chain_constants"]
 
 #: Compiler flags (``-O3`` gave no consistent gain: ``docs/generated.md``).
 DEFAULT_FLAGS = ("-O2", "-shared", "-fPIC")

@@ -61,9 +61,7 @@ from ..io import floats as _floats
 from .box import PAPER_INERTIA_KEYS, Box, _inertia_keys, paper_upper
 
 __all__ = [
-    "PAPER_INERTIA_KEYS",
     "Bounds",
-    "paper_upper",
     "paper_bounds",
     "certified_bounds",
     "certified_radius",
@@ -145,7 +143,7 @@ def paper_bounds(robot, box: Box, inertia_keys=PAPER_INERTIA_KEYS) -> Bounds:
     """Method (a), the paper's: reproduces Table 3 and ``rho = 186.8129`` for Table 1.
 
     ``theta_0 = (theta(p) + theta(p_up)) / 2`` and ``rho = ||theta_0 - theta(p)||``,
-    where ``p_up`` (:func:`paper_upper`) adds the box's upper deltas to every mass
+    where ``p_up`` (:func:`~rc3r.uncertainty.box.paper_upper`) adds the box's upper deltas to every mass
     and CoM coordinate and, of the inertia entries, only to ``inertia_keys``
     (default ``("iyy", "izz")``, which reproduces the published Table 3; the
     paper's text perturbs every entry: pass ``"all"`` for that reading).

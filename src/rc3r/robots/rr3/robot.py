@@ -18,7 +18,7 @@ from . import regressor as _reg
 from . import engine as _engine
 from .params import PARAM_NAMES, ArmParams, physical_issues, table1, theta, theta_from_vector
 
-__all__ = ["RR3", "PARAM_NAMES", "COEFFICIENT_NAMES"]
+__all__ = ["RR3", "COEFFICIENT_NAMES"]  # PARAM_NAMES (imported here too): rc3r.robots.rr3.params
 
 #: Names of the 15 coefficients (paper order, section 3.1.1).
 COEFFICIENT_NAMES = tuple(f"theta{i}" for i in range(1, 16))
