@@ -43,6 +43,7 @@ class RR3(Robot):
     name = "rr3"
     #: What theta's entries are (``verify-model`` prints it).
     theta_order = "paper order, section 3.1.1"
+
     @property
     def compiled_kernels(self) -> tuple[str, np.ndarray]:
         """``(module, kc)``: the kernel supply :mod:`.engine` and its constants ``[theta, l2, g0]``."""
