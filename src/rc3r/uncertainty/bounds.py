@@ -56,7 +56,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError, ParameterError
+from ..errors import ParameterError
 from ..io import floats as _floats
 from .box import PAPER_INERTIA_KEYS, Box, _inertia_keys, paper_upper
 
