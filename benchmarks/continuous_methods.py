@@ -32,6 +32,7 @@ def main() -> None:
 
     from rc3r.plants import as_plant
     from rc3r.simulate import _initial_state, continuous_method, simulate
+    from rc3r.simulate._fast import simulator
     from rc3r.study import build_run
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -66,8 +67,8 @@ def main() -> None:
         umax = np.abs(ref.u).max()
         p = spec.plant
         x0 = _initial_state(p.n, spec.law, spec.trajectory, None)
-        rhs = p.fast_engine.instance.closed_loop_xdot
-        rargs = (p.fast_engine.constants(p), as_plant(p).pack(), int(spec.law.code), spec.law.pack(p.n),
+        rhs = simulator(p).instance.closed_loop_xdot
+        rargs = (simulator(p).constants(p), as_plant(p).pack(), int(spec.law.code), spec.law.pack(p.n),
                  spec.trajectory.pack(), p.n)
         sol = solve_ivp(rhs, (0.0, args.duration), x0, method="Radau", t_eval=ref.t, rtol=1e-10, atol=1e-12,
                         max_step=1e-3, args=rargs)

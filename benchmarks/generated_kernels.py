@@ -63,7 +63,7 @@ def main(argv=None) -> int:
     import pinocchio as pin
 
     from rc3r.robots.generated import DEFAULT_FLAGS, GeneratedKernels
-    from rc3r.robots.pinocchio_bench import median_per_state, pin_rnea_cpp_estimate
+    from rc3r.experiments.bench_generic import median_per_state, pin_rnea_cpp_estimate
 
     robot = robot_of(args.robot)
     n, N, R = robot.n, args.n, args.repeats

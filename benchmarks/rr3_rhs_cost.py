@@ -22,12 +22,13 @@ from numba import njit
 def main() -> None:
     from rc3r.plants import as_plant
     from rc3r.simulate import _initial_state, simulate
+    from rc3r.simulate._fast import simulator
     from rc3r.study import build_run
     from rc3r.trajectory import reference_into
 
     spec = build_run(controller="robust", perturbed=True, duration=10.0)
     p = spec.plant
-    eng = p.fast_engine
+    eng = simulator(p)
     mod = eng.instance
     cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
     kc, fx = eng.constants(p), as_plant(p).pack()

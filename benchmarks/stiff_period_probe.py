@@ -12,6 +12,7 @@ import sys, numpy as np
 from dataclasses import replace
 import rc3r
 from rc3r.simulate import simulate
+from rc3r.simulate._fast import simulator
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent)); import design_table as D  # noqa: E402
 arm, rate = sys.argv[1], float(sys.argv[2])
@@ -20,7 +21,7 @@ spec = rc3r.build_run(urdf=str(D.ROBOTS / urdf), lock=lock or None, controller="
                       duration=0.1, friction="urdf", torque_limit="urdf", perturbed=True)
 P = spec.true_plant
 res = simulate(P, spec.law, spec.trajectory, spec.options)
-rigid = P.rigid; eng = rigid.fast_engine; mod = eng.instance
+rigid = P.rigid; eng = simulator(rigid); mod = eng.instance
 kc = eng.constants(rigid); fx = P.pack(); wk = mod._make_work(kc); n = P.n; n2 = 2 * n
 fric = mod._friction(fx, n)
 cp, tp, code = spec.law.pack(n), spec.trajectory.pack(), int(spec.law.code)

@@ -295,7 +295,7 @@ def test_a_urdf_arm_is_read_once_per_process_and_again_when_its_file_changes(tmp
 
 def test_design_benchmark_table_states_the_goal():
     """render() of a bench_design result: wall, runs, runs per second and the 2-minute goal with the ratio."""
-    from rc3r.design.bench import GOAL_S, render
+    from rc3r.experiments.bench_design import GOAL_S, render
 
     r = {"command": "rc3r design --robot ur5 --payload 0:3 --rate 1000 --out DIR", "exit": 0, "wall_s": 240.0,
          "runs": 600, "runs_per_s": 2.5, "simulated_s": 6000.0, "goal_s": GOAL_S, "ratio_to_goal": 2.0,

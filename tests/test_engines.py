@@ -66,11 +66,12 @@ def test_chain_supply_entry_points_equal_the_robot(ur5, rng):
     (1e-12 relative), and forward_dynamics_into on a payload plant's constants equals that plant's
     pinocchio.aba (1e-10): the engine sees the plant through these two functions only."""
     from rc3r.robots import pinocchio_supply as PK
+    from rc3r.simulate import _fast
     from rc3r.uncertainty.payload import with_payload
 
     plant = with_payload(ur5, 3.0, (0.0, 0.0, 0.1))
     module, kc = plant.compiled_kernels
-    assert module == PK.__name__ and plant.fast_engine.module == module
+    assert module == PK.__name__ and _fast.simulator(plant).module == module
     for _ in range(5):
         q, qd, tau = (x[0] for x in _states(plant, rng, 1))
         v, a = rng.uniform(-3.0, 3.0, (2, plant.n))
@@ -181,7 +182,7 @@ def test_engine_names_aliases_and_registry():
         SimOptions(engine="echo-test")
 
     class NoKernels(type(rc3r.load_robot())):
-        fast_engine = None
+        compiled_kernels = None
 
     arm = NoKernels.nominal()
     with pytest.raises(ParameterError, match="has no compiled simulator"):
@@ -205,7 +206,7 @@ from rc3r.simulate import _fast
 spec = rc3r.build_run(robot=sys.argv[1], controller="fbl", duration=0.002, rate=1000.0)
 t0 = time.perf_counter()
 res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-sim = spec.plant.fast_engine.instance
+sim = _fast.simulator(spec.plant).instance
 print("FILE", sim.__file__, os.stat(sim.__file__).st_mtime_ns, res.status, res.engine,
       "%.1f" % (time.perf_counter() - t0))
 """
@@ -249,7 +250,7 @@ def test_is_cached_looks_only_at_the_integrator_the_run_needs(tmp_path, monkeypa
     monkeypatch.setattr(_fast, "instantiate", lambda module: fake)
     eng = _fast.CompiledSimulator("x")
     assert eng.is_cached("sampled") and not eng.is_cached("continuous") and not eng.is_cached()
-    plant = SimpleNamespace(fast_engine=eng, n=6)
+    plant = SimpleNamespace(compiled_kernels=("x", None), n=6)
     announce_compile(plant, 1000.0)
     assert capsys.readouterr().err == ""
     announce_compile(plant, None)

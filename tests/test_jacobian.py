@@ -17,13 +17,14 @@ import pytest
 import rc3r
 from rc3r.plants import as_plant
 from rc3r.simulate import _initial_state
+from rc3r.simulate._fast import simulator
 from rc3r.simulate.engines._jacobian import work
 
 
 def _setup(controller, eps=None, **kw):
     spec = rc3r.build_run(controller=controller, perturbed=True, eps=eps, duration=1.0, **kw)
     p = spec.plant
-    eng = as_plant(p).rigid.fast_engine
+    eng = simulator(as_plant(p).rigid)
     mod = eng.instance
     n = p.n
     cp, tp, code = spec.law.pack(n), spec.trajectory.pack(), int(spec.law.code)

@@ -18,7 +18,7 @@ from _helpers import assert_close
 from rc3r.errors import ConfigError, UrdfError
 from rc3r.robots.base_parameters import INDEPENDENCE_TOL, RANK_RTOL, base_parameters
 from rc3r.robots.pinocchio import PinocchioRobot, example_robot_data_dir
-from rc3r.robots.pinocchio_bench import bench_regressor
+from rc3r.experiments.bench_generic import bench_regressor
 from rc3r.verify import verify_model
 
 REPO_3R = "urdf/rr3.urdf"

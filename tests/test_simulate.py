@@ -218,14 +218,17 @@ def test_wall_time_never_includes_compilation(monkeypatch):
 
     spec = build_run(controller="fbl", duration=0.05)
     calls = []
-    real = spec.plant.fast_engine.continuous
+    from rc3r.simulate._fast import simulator
+
+    eng = simulator(spec.plant)
+    real = eng.continuous
 
     def counting(*a, **k):
         calls.append(a[6].shape[0])  # rows of t_out in this call
         return real(*a, **k)
 
     monkeypatch.setattr(S, "_WARMED", set())
-    monkeypatch.setattr(spec.plant.fast_engine, "continuous", staticmethod(counting))
+    monkeypatch.setattr(eng, "continuous", staticmethod(counting))
     S.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
     assert calls[0] == 3 and calls[1] == 51  # warm-up of 2 periods (3 rows), then the 0.05 s run
     calls.clear()

@@ -26,16 +26,14 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.rr3.robot``              :class:`RR3`, the contract's implementation
 ``rc3r.robots.rr3.engine``             the 3R's kernel supply of the compiled engine
 ``rc3r.robots.rr3.paper``              the paper's box, gains, trajectory, sampled rate (the robot's data)
-``rc3r.robots.rr3.bench_integrators``  Rosenbrock vs SciPy Radau/BDF on the same compiled loop
 ``rc3r.robots.rr3.c_kernels``          the closed-form Slotine--Li regressor as C99 source (``rc3r export``)
 ``rc3r.robots.pinocchio``              :class:`PinocchioRobot`: any URDF arm (UR5, Panda) in base parameters
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
 ``rc3r.robots.pinocchio_supply``       a chain's kernel supply of the compiled engine (Y^T r, Y theta in O(n))
-``rc3r.robots.pinocchio_bench``        ``rc3r bench``'s generic-robot section (UR5, Panda)
 ``rc3r.robots.generated``              generated C kernels of any arm (CasADi SX -> C, cached on disk)
+``rc3r.robots.generated_chain``        what is generated (``FUNCTIONS``) and from what (a chain's constants)
 ``rc3r.robots.generated_sym``          their symbolic recursions and the C batch wrapper
-``rc3r.robots.generated_bench``        ``rc3r bench``'s generated-kernel section (UR5 tau vs pin.rnea)
 ``rc3r.controllers``                   control laws u = Y theta_eff + w and their registry
 ``rc3r.controllers._kernels``          compiled kernels of the built-in laws (generic over n, p)
 ``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
@@ -87,29 +85,35 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
 ``rc3r.export``                        ``rc3r export``: a run's controller as self-contained C99, with a checking harness
 ``rc3r.export.c``                      the C controller: trajectory, law, state, zero-order hold, delay line
+``rc3r.export.literals``               C99 literals of doubles and arrays (shared by the controller and the chain)
 ``rc3r.export.chain``                  a serial chain's Slotine--Li regressor in C (port of the compiled kernel)
 ``rc3r.export.harness``                recorded states, rc3r's torques, ``check.c`` and the ``Makefile``
 ``rc3r.design``                        ``rc3r design``: gains and eps for a controller rate, verified over the bounds
 ``rc3r.design.rule``                   the sampled-data rule and its fast form (the defaults of sampled runs)
 ``rc3r.design.verify``                 the fast form verified over the bounds at the rate and rate / margin (campaign runner)
 ``rc3r.design.report``                 ``design.toml``, ``design.md``, the figure
-``rc3r.design.bench``                  wall time of a default design (``rc3r bench``)
 ``rc3r.campaign``                      many runs: Monte Carlo over the box, eps sweep, rate map
 ``rc3r.campaign.jobs``                 :class:`Job` (one run, picklable) and :func:`run_job` (its row)
 ``rc3r.campaign.runner``               resumable row-by-row table, local process pool or Dask
 ``rc3r.campaign.studies``              the campaigns' jobs, summaries, chattering classification
 ``rc3r.campaign.figures``              the campaigns' figures
-``rc3r.campaign.bench``                campaign throughput with 1 and 2 workers (``rc3r bench``)
 ``rc3r.experiments``                   above the library: studies of named robots, benchmarks
 ``rc3r.experiments.paper3r``           the paper's section 4 on its 3R: five scenarios, claims (``rc3r paper``)
 ``rc3r.experiments.bench3r``           ``rc3r bench``: closed form vs Pinocchio, simulation timings
 ``rc3r.experiments.bench_startup``     ``rc3r bench``'s fresh-process rows: compile, cold start, memory
+``rc3r.experiments.bench_methods``     Rosenbrock vs SciPy Radau/BDF on the same compiled loop
+``rc3r.experiments.bench_generic``     ``rc3r bench``'s generic-robot section (UR5, Panda)
+``rc3r.experiments.bench_generated``   ``rc3r bench``'s generated-kernel section (UR5 tau vs pin.rnea)
+``rc3r.experiments.bench_campaign``    campaign throughput with 1 and 2 workers (``rc3r bench``)
+``rc3r.experiments.bench_design``      wall time of a default design (``rc3r bench``)
+``rc3r.experiments._report``           where the benchmarks' progress messages go
 ``rc3r.verify``                        checks of a robot against Pinocchio
 ``rc3r.plotting``                      figures (never switches the matplotlib backend)
 ``rc3r.animation``                     the arm tracking its trajectory in 3D (Pinocchio FK), as a GIF
 ``rc3r.io``                            atomic file output (user's umask), TOML reading
 ``rc3r.provenance``                    versions, git commit, command line of an output
 ``rc3r.errors``                        exception types (one-line errors on the command line)
+``rc3r.conventions``                   orders every layer shares (Pinocchio's standard parameters, ``STD_KEYS``)
 ``rc3r._numba_cache``                  numba's disk cache keyed on the package's content (no stale kernels)
 ``rc3r.cli``                           the command line: the only place that parses, prints, exits
 ``rc3r.cli.model``                     ``verify-model``, ``make-urdf``

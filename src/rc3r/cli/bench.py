@@ -124,7 +124,7 @@ def render_text(r: dict) -> str:
     if "generated" in r:
         lines += ["", _render_generated(r["generated"])]
     if "design" in r:
-        from ..design.bench import render as render_design
+        from ..experiments.bench_design import render as render_design
 
         lines += ["", render_design(r["design"])]
     lines.append("")
@@ -225,24 +225,25 @@ def cmd_bench(args) -> int:
     from ..experiments.bench3r import run_bench
 
     r = run_bench(quick=quick, progress=_progress)
-    from ..robots.pinocchio_bench import bench_generic
+    from ..experiments.bench_generic import bench_generic
 
     r["generic"] = bench_generic(quick=quick, progress=_progress)
-    from ..campaign.bench import bench_throughput
+    from ..experiments.bench_campaign import bench_throughput
 
     r["throughput"] = bench_throughput(n_plants=2 if quick else 100, duration=0.5 if quick else 10.0,
                                        progress=_progress)
     r["throughput_ur5"] = bench_throughput(n_plants=2 if quick else 100, duration=0.5 if quick else 10.0,
                                            robot="ur5", progress=_progress,
                                            config={"payload": {"mass": [0.0, 3.0]}, "simulation": {"rate": 1000.0}})
-    from ..robots.generated_bench import bench_generated
+    from ..experiments.bench_generated import bench_generated
 
     r["generated"] = bench_generated("ur5", quick=quick, progress=_progress)
     if "check" in r["generated"]:
         r["checks_ok"] = r["checks_ok"] and r["generated"]["check"]["ok"]
-    from ..design.bench import bench_design
+    from ..experiments.bench_design import bench_design
+    from . import main
 
-    r["design"] = bench_design(quick=quick, progress=_progress)
+    r["design"] = bench_design(main, quick=quick, progress=_progress)
     if getattr(args, "json", False):
         print(json.dumps(_jsonable(r), indent=2))
     else:

@@ -12,6 +12,7 @@ from pathlib import Path
 from ..errors import ConfigError, DivergenceError
 from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
 from ..robots import DEFAULT_ROBOT, robot_class
+from ..simulate._fast import simulator
 from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
 from ..study import build_run, execute
@@ -27,7 +28,7 @@ def announce_compile(plant, rate=False) -> None:
     """Say so before a first run compiles the robot's simulator (numba, once; measured on the 2-core machine:
     the 3R's continuous integrator 34 s and its sampled one 20 s (``rc3r bench``, 2026-12-05), 87 s of CPU for
     the UR5 chain engine (2026-12-02))."""
-    eng = getattr(plant, "fast_engine", None)
+    eng = simulator(plant)
     which = None if rate is False else ("continuous" if rate is None else "sampled")  # False: both modes
     if eng is not None and not getattr(eng, "is_cached", lambda which=None: True)(which):
         small = {"continuous": "about 35 s", "sampled": "about 20 s"}.get(which, "about a minute")

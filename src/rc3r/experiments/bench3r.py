@@ -63,6 +63,7 @@ import numpy as np
 from numba import njit
 
 from .._trig import sincos
+from ._report import _REPORT, _progress
 from ..robots.rr3 import kernels as K
 
 __all__ = ["run_bench", "TARGETS"]
@@ -138,14 +139,6 @@ def _forward_dynamics_in_loop(th, Q, QD, U, l2, g0, out):
 
 
 # ---- small utilities --------------------------------------------------------------------
-
-
-#: Where progress messages go; :func:`run_bench` sets it (the command line prints them).
-_REPORT = [lambda msg: None]
-
-
-def _progress(msg: str) -> None:
-    _REPORT[0](msg)
 
 
 def _time(fn, repeats: int) -> tuple[float, float]:
@@ -318,7 +311,7 @@ def bench_ops(n: int, repeats: int) -> tuple[dict, dict, dict]:
 
     # ---- Pinocchio's C++ cost: an estimate (see the module docstring) ----
     _progress("estimating Pinocchio's C++ cost (binding overhead subtracted) ...")
-    from ..robots.pinocchio_bench import pin_rnea_cpp_estimate
+    from .bench_generic import pin_rnea_cpp_estimate
 
     t_same, t_empty, t_cpp = pin_rnea_cpp_estimate(m, Q[0], QD[0], QDD[0], max(n, 20000), repeats)
     best_tau = min(ops["inverse_dynamics compiled"]["median_s"], ops["inverse_dynamics batch"]["median_s"])
@@ -451,7 +444,7 @@ def run_bench(quick: bool = False, progress=None) -> dict:
         out["reference_speedup"] = {"fast_wall_s": f["wall_s"], "reference_wall_s": r["wall_s"],
                                     "speedup": r["wall_s"] / f["wall_s"] if f["wall_s"] > 0 else None}
     out["targets"] = _targets(ops, out["sims"], duration)
-    from ..robots.rr3.bench_integrators import bench_integrators
+    from .bench_methods import bench_integrators
     out["integrators"] = bench_integrators(duration, progress=_progress)
     skip = {"skipped": "quick mode"}
     from .bench_startup import bench_cold_start, bench_compile, bench_memory

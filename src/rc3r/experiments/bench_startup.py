@@ -21,7 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from .bench3r import _progress
+from ._report import _progress
 
 __all__ = ["bench_compile", "bench_cold_start", "bench_memory", "COLD_START_COMMAND", "COLD_START_TARGET_S"]
 

@@ -31,35 +31,18 @@ business (the chain never forms Y).
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..controllers import Law
 from ..controllers import _kernels as K
-from ..errors import ConfigError, ParameterError
+from ..errors import ConfigError
 from ..trajectory import Trajectory
+from .literals import c_array, c_double
 
 __all__ = ["c_double", "c_array", "regressor_source", "controller_sources", "check_exportable", "LAW_CODES"]
 
 #: Law codes (:mod:`rc3r.controllers._kernels`) with a C port.
 LAW_CODES = {K.FBL: "fbl", K.ROBUST: "robust", K.ROBUST_COEFF: "robust-coeff", K.ADAPTIVE: "adaptive", K.PD: "pd"}
-
-
-def c_double(x) -> str:
-    """The C literal of a finite double: ``repr`` (it always has a ``.`` or an exponent and reads back
-    exactly); ParameterError for NaN or an infinity."""
-    x = float(x)
-    if not math.isfinite(x):
-        raise ParameterError(f"cannot export the non-finite constant {x!r}")
-    return repr(x)
-
-
-def c_array(values, fmt=c_double, per_line: int = 4) -> str:
-    """``{a, b, ...}`` of ``values`` (flattened), ``per_line`` literals to a line."""
-    items = [fmt(v) for v in np.ravel(values)]
-    lines = [", ".join(items[i:i + per_line]) for i in range(0, len(items), per_line)]
-    return "{\n    " + ",\n    ".join(lines) + "\n}"
 
 
 def regressor_source(model) -> str:

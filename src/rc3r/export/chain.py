@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .c import c_array, c_double
+from .literals import c_array, c_double
 
 __all__ = ["chain_source"]
 

@@ -31,8 +31,9 @@ Methods
     :attr:`Robot.standard_parameter_names`, :meth:`Robot.theta_of_standard`,
     :meth:`Robot.with_standard_parameters`, :meth:`Robot.physical_issues`.
 Optional
-    :attr:`Robot.fast_engine`: a compiled closed-loop simulator (see
-    :mod:`rc3r.robots.rr3.engine` for the one the paper's arm has). Robots
+    :attr:`Robot.compiled_kernels`: the kernel supply of the compiled engine (see
+    :mod:`rc3r.robots.rr3.engine` for the one the paper's arm has), from which
+    :func:`rc3r.simulate._fast.simulator` builds its simulator. Robots
     without one are simulated by the generic Python engine
     (:mod:`rc3r.simulate`), with any control law, in continuous or sampled time.
 
@@ -156,8 +157,9 @@ class Robot(abc.ABC):
 
     # ---- optional ---------------------------------------------------------------------
 
-    #: A compiled closed-loop simulator for this robot, or None (generic Python engine).
-    fast_engine = None
+    #: ``(module, kc)``: the compiled engine's kernel supply (a dotted module name, contract
+    #: :mod:`rc3r.simulate.engines._template`) and its packed constants, or None (generic Python engine).
+    compiled_kernels = None
 
     def describe(self) -> dict:
         """JSON-ready identification of this robot (name, label, n, p)."""

@@ -50,16 +50,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..conventions import STD_KEYS
 from ..errors import UrdfError
 
-__all__ = ["STD_KEYS", "ZERO_RTOL", "RANK_RTOL", "INDEPENDENCE_TOL", "K_ATOL", "IDENTIFIABILITY_RTOL",
+__all__ = ["ZERO_RTOL", "RANK_RTOL", "INDEPENDENCE_TOL", "K_ATOL", "IDENTIFIABILITY_RTOL",
            "BaseParameters", "standard_parameter_names", "standard_regressor_stack", "base_parameters",
            "identifiability", "physical_issues", "check_model"]
-
-#: Pinocchio's 10 standard parameters of a body, about the joint-frame origin, in the
-#: joint frame (``pinocchio.Inertia.toDynamicParameters`` order): mass [kg], first
-#: moments m c [kg m], inertia entries [kg m^2].
-STD_KEYS = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 
 #: A scaled-regressor column whose norm is at most this times the largest one is zero.
 ZERO_RTOL = 1e-10

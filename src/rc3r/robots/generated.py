@@ -56,7 +56,7 @@ Cache: a library is kept under ``cache_dir/<key>/`` (default ``$RC3R_CACHE_DIR/k
 variable is set, else ``~/.cache/rc3r/kernels``), where ``key`` is a SHA-256 of the chain's
 constants and standard parameters (their float64 bytes), the base columns, the function list,
 the CasADi version, the compiler (name, ``--version`` first line) and flags, and the text of this
-file. Each entry is built in a temporary directory next to it and moved in by ``os.replace``,
+file, of :mod:`.generated_chain` and of :mod:`.generated_sym`. Each entry is built in a temporary directory next to it and moved in by ``os.replace``,
 so a concurrent process sees either no entry or a complete one; a cache hit generates and
 compiles nothing. Compiler: ``$RC3R_CC``, else ``$CC``, else ``cc``.
 
@@ -73,27 +73,17 @@ import shutil
 import subprocess
 import tempfile
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ConfigError, ParameterError
 from .base import stack_states
+from .generated_chain import FUNCTIONS, Chain
 from .generated_sym import _functions, _wrapper
 from .pinocchio_kernel import local_axis
 
-__all__ = ["GeneratedKernels", "FUNCTIONS", "DEFAULT_FLAGS", "default_cache_dir", "chain_constants"]
-
-#: The generated functions and their inputs, in this order.
-FUNCTIONS = {
-    "rnea": ("q", "qd", "qdd"),
-    "slotine_li": ("q", "qd", "v", "a"),
-    "mass": ("q",),
-    "coriolis": ("q", "qd"),
-    "gravity": ("q",),
-    "aba": ("q", "qd", "tau"),
-}
+__all__ = ["GeneratedKernels", "DEFAULT_FLAGS", "default_cache_dir", "chain_constants"]
 
 #: Compiler flags (``-O3`` gave no consistent gain: ``docs/generated.md``).
 DEFAULT_FLAGS = ("-O2", "-shared", "-fPIC")
@@ -107,46 +97,6 @@ def default_cache_dir() -> Path:
     """``$RC3R_CACHE_DIR/kernels`` if that variable is set (non-empty), else ``~/.cache/rc3r/kernels``."""
     base = os.environ.get("RC3R_CACHE_DIR")
     return Path(base) / "kernels" if base else Path.home() / ".cache" / "rc3r" / "kernels"
-
-
-@dataclass(frozen=True)
-class Chain:
-    """The kinematic constants of a chain of 1-DoF joints (read by :func:`chain_constants`).
-
-    Attributes
-    ----------
-    parent : numpy.ndarray
-        (n,) int: joint index of each joint's parent, -1 for the base.
-    revolute : numpy.ndarray
-        (n,) bool: revolute (else prismatic).
-    R0, p0 : numpy.ndarray
-        (n, 3, 3), (n, 3): each joint's fixed placement in its parent's frame [-, m].
-    axis : numpy.ndarray
-        (n, 3): unit axis in the joint's own frame.
-    gravity : numpy.ndarray
-        (6,): ``model.gravity`` (linear [m/s^2], angular), in the base frame.
-    pi : numpy.ndarray
-        (n, 10): standard parameters (Pinocchio's order), about each joint-frame origin.
-    """
-
-    parent: np.ndarray
-    revolute: np.ndarray
-    R0: np.ndarray
-    p0: np.ndarray
-    axis: np.ndarray
-    gravity: np.ndarray
-    pi: np.ndarray
-
-    @property
-    def n(self) -> int:
-        return int(self.parent.size)
-
-    def digest_bytes(self) -> bytes:
-        """The float64/int64 bytes of every constant (the cache key's model part)."""
-        parts = [self.parent.astype(np.int64), self.revolute.astype(np.int64), self.R0, self.p0, self.axis,
-                 self.gravity, self.pi]
-        return b"".join(np.ascontiguousarray(x, dtype=np.int64 if x.dtype.kind in "ib" else np.float64).tobytes()
-                        for x in parts)
 
 
 def chain_constants(model, where: str = "model") -> Chain:
@@ -213,8 +163,10 @@ def _compiler_id(compiler: str) -> tuple[str, str]:
 
 
 def _this_source() -> bytes:
-    """The text of this module and of :mod:`.generated_sym` (the expressions): both enter the cache key."""
-    return Path(__file__).read_bytes() + Path(__file__).with_name("generated_sym.py").read_bytes()
+    """The text of this module, of :mod:`.generated_chain` (the functions generated) and of
+    :mod:`.generated_sym` (the expressions): all three enter the cache key."""
+    here = Path(__file__)
+    return b"".join(here.with_name(name).read_bytes() for name in (here.name, "generated_chain.py", "generated_sym.py"))
 
 
 def cache_key(chain: Chain, columns, names, compiler: str, flags) -> str:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from .generated import Chain
+    from .generated_chain import Chain
 
 __all__ = []
 
@@ -241,7 +241,7 @@ def _functions(chain: Chain, columns, names):
     their output shapes."""
     import casadi as cs
 
-    from .generated import FUNCTIONS
+    from .generated_chain import FUNCTIONS
 
     sym = _Sym(chain)
     n = chain.n

@@ -38,7 +38,7 @@ Continuous joints
     dynamics are identical; only the configuration representation changes).
 
 Standard parameters are Pinocchio's, 10 per moving body, about the joint-frame
-origin in the joint frame (:data:`~rc3r.robots.base_parameters.STD_KEYS`); a
+origin in the joint frame (:data:`~rc3r.conventions.STD_KEYS`); a
 body is a joint with everything rigidly attached to it (fixed joints are merged
 by Pinocchio, locked joints by ``pinocchio.buildReducedModel``).
 """
@@ -318,7 +318,6 @@ class PinocchioRobot(Robot):
     #: so exact ranges over a box follow from interval arithmetic (:mod:`rc3r.uncertainty.bounds`).
     linear_in_standard_parameters = True
     compiled_kernels = property(lambda self: None if self.kernel is None else self.kernel.supply(self))
-    fast_engine = property(lambda self: None if self.kernel is None else self.kernel.engine)  # ChainKernel
 
     # ---- sizes and parameters ---------------------------------------------------------
     @property

@@ -51,7 +51,7 @@ from .. import _numba_cache
 __all__ = ["ChainKernel"]
 
 _JIT = dict(cache=True, nogil=True, fastmath=False)
-#: The dotted name of the chain's kernel supply (:attr:`ChainKernel.engine`).
+#: The dotted name of the chain's kernel supply (:meth:`ChainKernel.supply`).
 SUPPLY = "rc3r.robots.pinocchio_supply"
 _INLINE = dict(_JIT, inline="always")
 
@@ -488,14 +488,9 @@ class ChainKernel:
 
     def supply(self, robot) -> tuple[str, np.ndarray]:
         """``robot.compiled_kernels``: the supply module (:data:`SUPPLY`) and :meth:`pack` of the robot's base
-        columns and standard parameters (the robot's ``fast_engine`` is :attr:`engine`)."""
+        columns and standard parameters, from which the engine builds its simulator
+        (:func:`rc3r.simulate._fast.simulator`)."""
         return SUPPLY, self.pack(robot.base.independent, robot.standard_parameters())
-
-    @property
-    def engine(self):
-        """The compiled engine instantiated on the chain's supply (:class:`rc3r.simulate._fast.CompiledSimulator`)."""
-        from ..simulate._fast import CompiledSimulator
-        return CompiledSimulator(SUPPLY)
 
     def forward_dynamics(self, X, pi) -> np.ndarray:
         """``qdd`` (N, n) at the states ``X`` (3, N, n) = (q, qd, tau) for standard parameters ``pi``

@@ -9,7 +9,7 @@ Two **modes** (the result says which):
 
 Three **engines**:
 
-* ``fast`` -- the robot's compiled simulator (:attr:`Robot.fast_engine`; the paper's
+* ``fast`` -- the compiled simulator built from the robot's kernels (:attr:`Robot.compiled_kernels`; the paper's
   arm has one: closed-form plant on the plant's theta; for continuous mode Rosenbrock
   steps of at most 1 ms, RODAS for the robust laws (steps ending on the output grid) and
   ode23s for the others (stored rows interpolated inside the steps), :attr:`SimOptions.method`;
@@ -454,7 +454,9 @@ _WARMED: set = set()
 def _warm_up(run, plant, law, trajectory, opt: SimOptions, x0) -> None:
     """Run two output periods once per compiled integrator and process, untimed, so that numba's
     compilation (or cache load) is never booked as a simulation's wall time."""
-    key = (opt.engine, getattr(plant.rigid, "fast_engine", None), opt.mode)  # one compiled integrator
+    from ._fast import simulator
+
+    key = (opt.engine, simulator(plant.rigid), opt.mode)  # one compiled integrator
     if key in _WARMED:
         return
     short = 2.0 / (opt.output_rate if opt.rate is None else min(opt.rate, opt.output_rate))

@@ -11,8 +11,9 @@ module's. Any edit of a numba module of the package makes a new directory, hence
 The directory is ``$NUMBA_CACHE_DIR/rc3r_engines`` if that is set, else the user's cache
 (``$XDG_CACHE_HOME`` or ``~/.cache``)``/rc3r/engines``, else the temporary directory (never
 inside the package: :func:`rc3r._numba_cache.package_hash` reads every module there);
-instantiations of other package versions older than a day are removed. :class:`CompiledSimulator` is what a
-robot's ``fast_engine`` is: the instantiation of one supply behind the calls :func:`run` makes.
+instantiations of other package versions older than a day are removed. :class:`CompiledSimulator` is the
+instantiation of one supply behind the calls :func:`run` makes; :func:`simulator` builds it, once per supply,
+from what a robot declares (the robot itself knows no simulator).
 
 **Chunks.** The compiled integrators run in chunks of :data:`CHUNK_S` simulated seconds: between two
 chunks control is back in Python, so Ctrl-C or SIGTERM (which the command line turns into
@@ -42,7 +43,7 @@ from . import METHODS, _limits, _result, _sample_grid
 from . import status as S
 from .steps import continuous_method, period_budget
 
-__all__ = ["CompiledSimulator", "instantiate", "run", "CHUNK_S", "HMAX"]
+__all__ = ["CompiledSimulator", "simulator", "instantiate", "run", "CHUNK_S", "HMAX"]
 
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
@@ -163,7 +164,7 @@ def instantiate(module: str):
 
 
 class CompiledSimulator:
-    """A robot's ``fast_engine``: the compiled integrators instantiated on the kernel supply ``module``.
+    """The compiled integrators instantiated on the kernel supply ``module`` (:func:`simulator` of a robot).
 
     ``continuous(rigid, ...)`` returns ``(status, n_stored, n_rhs, n_steps, n_rejected, t_end)``;
     ``sampled(rigid, ..., s0, ...)`` (s0: first sample index) returns
@@ -232,13 +233,41 @@ class CompiledSimulator:
                                                float(rtol), float(atol), int(budget))
 
 
+#: One :class:`CompiledSimulator` per supply module, shared by every robot that declares it.
+_SIMULATORS: dict[str, CompiledSimulator] = {}
+
+
+def simulator(rigid) -> CompiledSimulator | None:
+    """The compiled simulator of a rigid body, built from the kernels it declares.
+
+    Parameters
+    ----------
+    rigid : Robot
+        A robot (or any rigid body) with ``compiled_kernels``, ``(module, kc)``
+        (:attr:`rc3r.robots.base.Robot.compiled_kernels`), or None / no such attribute.
+
+    Returns
+    -------
+    CompiledSimulator or None
+        The one instance for that supply module (the same object for every robot that declares it),
+        or None if ``rigid`` declares no compiled kernels (the generic Python engine runs it).
+    """
+    declared = getattr(rigid, "compiled_kernels", None)
+    if declared is None:
+        return None
+    module = declared[0]
+    if module not in _SIMULATORS:
+        _SIMULATORS[module] = CompiledSimulator(module)
+    return _SIMULATORS[module]
+
+
 def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     """Simulate on the rigid body's compiled simulator; ``plant`` is a :class:`~rc3r.plants.Plant` whose
     effects are compiled ones (packed by :meth:`~rc3r.plants.Plant.pack`), ``loop`` the sampled loop's
     effects (or None). ``model`` is ignored: the compiled regressor is the rigid body's, whose
     kinematics :func:`rc3r.simulate.simulate` checked equal to the model's."""
     rigid = plant.rigid
-    eng = rigid.fast_engine
+    eng = simulator(rigid)
     n = plant.n
     fx = plant.pack()
     kc = eng.constants(rigid)  # once per run (packing the UR5's took 0.4 ms per chunk)

@@ -56,51 +56,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError, ParameterError
+from ..errors import ParameterError
 from ..io import floats as _floats
-from .box import Box, body_keys, shifted
+from .box import PAPER_INERTIA_KEYS, Box, _inertia_keys, paper_upper
 
 __all__ = [
-    "PAPER_INERTIA_KEYS",
     "Bounds",
-    "paper_upper",
     "paper_bounds",
     "certified_bounds",
     "certified_radius",
     "quadratic_box_extrema",
 ]
-
-#: Inertia entries that method (a) perturbs: the ones that reproduce Table 3.
-PAPER_INERTIA_KEYS = ("iyy", "izz")
-
-
-def _inertia_keys(robot, inertia_keys) -> tuple[str, ...]:
-    """Normalise ``"all"``, one key or a sequence of keys to lower-case inertia keys of ``robot``."""
-    allowed = tuple(k.lower() for k in body_keys(robot.standard_parameter_names)[4:10])
-    if isinstance(inertia_keys, str):
-        inertia_keys = allowed if inertia_keys.lower() == "all" else (inertia_keys,)
-    keys = tuple(str(k).lower() for k in inertia_keys)
-    bad = [k for k in keys if k not in allowed]
-    if bad:
-        raise ConfigError(f"unknown inertia entries {bad} (allowed: {', '.join(allowed)} or 'all')")
-    return keys
-
-
-def _inertia_mask(robot, keys) -> np.ndarray:
-    per_body = [k.lower() for k in body_keys(robot.standard_parameter_names)]
-    size = len(robot.standard_parameter_names)
-    mask = np.zeros(size, dtype=bool)
-    for k in range(size // 10):
-        mask[10 * k : 10 * k + 4] = True  # mass and CoM
-        for j in range(4, 10):
-            mask[10 * k + j] = per_body[j] in keys
-    return mask
-
-
-def paper_upper(robot, box: Box, inertia_keys=PAPER_INERTIA_KEYS):
-    """``p_up`` of method (a): upper deltas on masses, CoM and the ``inertia_keys`` entries."""
-    keys = _inertia_keys(robot, inertia_keys)
-    return shifted(robot, np.where(_inertia_mask(robot, keys), box.upper, 0.0), "paper-upper")
 
 # ------------------------------------------------------------------------ Bounds
 
@@ -177,7 +143,7 @@ def paper_bounds(robot, box: Box, inertia_keys=PAPER_INERTIA_KEYS) -> Bounds:
     """Method (a), the paper's: reproduces Table 3 and ``rho = 186.8129`` for Table 1.
 
     ``theta_0 = (theta(p) + theta(p_up)) / 2`` and ``rho = ||theta_0 - theta(p)||``,
-    where ``p_up`` (:func:`paper_upper`) adds the box's upper deltas to every mass
+    where ``p_up`` (:func:`~rc3r.uncertainty.box.paper_upper`) adds the box's upper deltas to every mass
     and CoM coordinate and, of the inertia entries, only to ``inertia_keys``
     (default ``("iyy", "izz")``, which reproduces the published Table 3; the
     paper's text perturbs every entry: pass ``"all"`` for that reading).

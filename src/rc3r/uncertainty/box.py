@@ -27,7 +27,8 @@ import numpy as np
 from ..errors import ConfigError, ParameterError
 from ..io import MAX_MAGNITUDE, read_toml
 
-__all__ = ["Box", "parse_box", "load_box", "body_keys", "perturb", "shifted", "PERTURBATIONS"]
+__all__ = ["Box", "parse_box", "load_box", "body_keys", "perturb", "shifted", "paper_upper", "PAPER_INERTIA_KEYS",
+           "PERTURBATIONS"]
 
 #: Positions of the kinds inside the 10 parameters of one body.
 GROUPS = {"mass": (0,), "com": (1, 2, 3), "inertia": tuple(range(4, 10))}
@@ -303,6 +304,55 @@ def _unsimulable(robot) -> bool:
     return False
 
 
+#: Inertia entries that method (a) perturbs: the ones that reproduce Table 3.
+PAPER_INERTIA_KEYS = ("iyy", "izz")
+
+
+def _inertia_keys(robot, inertia_keys) -> tuple[str, ...]:
+    """Normalise ``"all"``, one key or a sequence of keys to lower-case inertia keys of ``robot``."""
+    allowed = tuple(k.lower() for k in body_keys(robot.standard_parameter_names)[4:10])
+    if isinstance(inertia_keys, str):
+        inertia_keys = allowed if inertia_keys.lower() == "all" else (inertia_keys,)
+    keys = tuple(str(k).lower() for k in inertia_keys)
+    bad = [k for k in keys if k not in allowed]
+    if bad:
+        raise ConfigError(f"unknown inertia entries {bad} (allowed: {', '.join(allowed)} or 'all')")
+    return keys
+
+
+def _inertia_mask(robot, keys) -> np.ndarray:
+    per_body = [k.lower() for k in body_keys(robot.standard_parameter_names)]
+    size = len(robot.standard_parameter_names)
+    mask = np.zeros(size, dtype=bool)
+    for k in range(size // 10):
+        mask[10 * k : 10 * k + 4] = True  # mass and CoM
+        for j in range(4, 10):
+            mask[10 * k + j] = per_body[j] in keys
+    return mask
+
+
+def paper_upper(robot, box: Box, inertia_keys=PAPER_INERTIA_KEYS):
+    """``p_up`` of method (a) (:func:`rc3r.uncertainty.bounds.paper_bounds`): upper deltas on masses, CoM
+    and the ``inertia_keys`` entries.
+
+    Parameters
+    ----------
+    robot : Robot
+        The nominal robot.
+    box : Box
+        The box on its standard parameters.
+    inertia_keys : str or sequence of str
+        The inertia entries perturbed (lower-case, ``"all"`` for the six).
+
+    Returns
+    -------
+    Robot
+        ``robot`` shifted by the box's upper deltas on those entries, labelled ``"paper-upper"``.
+    """
+    keys = _inertia_keys(robot, inertia_keys)
+    return shifted(robot, np.where(_inertia_mask(robot, keys), box.upper, 0.0), "paper-upper")
+
+
 def perturb(robot, box: Box, spec: str, *, simulable: bool = False):
     """A robot of the box, for plants of simulations.
 
@@ -310,7 +360,7 @@ def perturb(robot, box: Box, spec: str, *, simulable: bool = False):
 
     * ``"nominal"`` -- ``robot`` itself;
     * ``"upper"`` / ``"lower"`` -- every delta at its upper / lower end;
-    * ``"paper-upper"`` -- ``p_up`` of the paper's method (:func:`rc3r.uncertainty.bounds.paper_upper`);
+    * ``"paper-upper"`` -- ``p_up`` of the paper's method (:func:`paper_upper`);
     * ``"corner:<bits>"`` -- ``box.size`` characters ``0`` (lower) / ``1`` (upper) / ``n`` (nominal)
       in parameter order (``_`` separators allowed); ``"corner:<bits>@<s>"`` the corner's delta times
       s in [0, 1] (a corner pulled toward the nominal robot: ``rc3r design``'s worst-plant search), or
@@ -366,8 +416,6 @@ def _perturb(robot, box: Box, spec, simulable: bool):
     if kind == "lower" and not arg:
         return shifted(robot, box.lower, s)
     if kind == "paper-upper" and not arg:
-        from .bounds import paper_upper
-
         return paper_upper(robot, box)
     if kind == "corner":
         bits, at, frac = arg.replace("_", "").partition("@")

@@ -4,7 +4,7 @@ A payload is a rigid body of mass ``m`` [kg] in ``[m_lo, m_hi]`` with its centre
 mass at a known point ``c`` [m] of the last joint's frame and, optionally, a known
 inertia ``I_c`` [kg m^2] about its CoM (default zero: a point mass). It adds to the
 last body's standard parameters (Pinocchio's order about the joint origin,
-:data:`rc3r.robots.base_parameters.STD_KEYS`)
+:data:`rc3r.conventions.STD_KEYS`)
 
 .. math::
 
@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from ..robots.base_parameters import STD_KEYS
+from ..conventions import STD_KEYS
 from .bounds import Bounds
 from .box import Box, body_keys
 

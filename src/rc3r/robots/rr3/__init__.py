@@ -5,7 +5,7 @@
 * :mod:`.model`, :mod:`.regressor` -- NumPy-facing closed forms;
 * :mod:`.urdf` -- URDF writer/reader with the DH structure checks;
 * :mod:`.robot` -- :class:`RR3`, the :class:`~rc3r.robots.base.Robot` implementation;
-* :mod:`.engine` -- the compiled closed-loop simulator;
+* :mod:`.engine` -- the kernel supply of the compiled closed-loop simulator;
 * :mod:`.paper` -- the paper's box, gains, trajectory, five scenarios and claims.
 """
 from .robot import RR3

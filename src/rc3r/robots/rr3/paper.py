@@ -17,6 +17,7 @@ from importlib import resources
 from ...io import tomllib
 from ...trajectory import Sines
 from ...uncertainty.box import Box, parse_box
+from .params import PARAM_NAMES
 
 __all__ = ["paper_box", "paper_trajectory", "PAPER_GAINS", "PAPER_SAMPLED_RATE"]
 
@@ -37,8 +38,6 @@ def paper_box() -> Box:
 
     Packaged as ``rc3r/robots/rr3/data/paper_box.toml``.
     """
-    from .robot import PARAM_NAMES
-
     text = resources.files(__package__).joinpath("data/paper_box.toml").read_text()
     return parse_box(tomllib.loads(text), PARAM_NAMES, "rc3r/robots/rr3/data/paper_box.toml")
 

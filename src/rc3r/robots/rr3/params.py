@@ -42,6 +42,7 @@ __all__ = [
     "G0",
     "INERTIA_KEYS",
     "STD_NAMES",
+    "PARAM_NAMES",
     "LinkParams",
     "ArmParams",
     "table1",
@@ -60,6 +61,9 @@ INERTIA_KEYS = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
 
 #: Names of the 10 standard parameters of one link, in vector order.
 STD_NAMES = ("m", "rcx", "rcy", "rcz") + tuple(k.capitalize() for k in INERTIA_KEYS)
+
+#: Names of the 30 standard parameters (``m1, rcx1, ..., Iyz3``), vector order.
+PARAM_NAMES = tuple(f"{name}{k}" for k in (1, 2, 3) for name in STD_NAMES)
 
 
 def inertia_matrix(i6) -> np.ndarray:

@@ -12,17 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ...simulate._fast import CompiledSimulator
 from ..base import Robot
 from . import model as _model
 from . import regressor as _reg
 from . import engine as _engine
-from .params import STD_NAMES, ArmParams, physical_issues, table1, theta, theta_from_vector
+from .params import PARAM_NAMES, ArmParams, physical_issues, table1, theta, theta_from_vector
 
-__all__ = ["RR3", "PARAM_NAMES", "COEFFICIENT_NAMES"]
-
-#: Names of the 30 standard parameters (``m1, rcx1, ..., Iyz3``), vector order.
-PARAM_NAMES = tuple(f"{name}{k}" for k in (1, 2, 3) for name in STD_NAMES)
+__all__ = ["RR3", "COEFFICIENT_NAMES"]  # PARAM_NAMES (imported here too): rc3r.robots.rr3.params
 
 #: Names of the 15 coefficients (paper order, section 3.1.1).
 COEFFICIENT_NAMES = tuple(f"theta{i}" for i in range(1, 16))
@@ -47,8 +43,6 @@ class RR3(Robot):
     name = "rr3"
     #: What theta's entries are (``verify-model`` prints it).
     theta_order = "paper order, section 3.1.1"
-    #: The compiled engine instantiated on this arm's kernel supply (:mod:`.engine`).
-    fast_engine = CompiledSimulator(_engine.ENGINE)
 
     @property
     def compiled_kernels(self) -> tuple[str, np.ndarray]:

@@ -146,7 +146,7 @@ class CompiledEngine(Engine):
 
     def unavailable(self, plant, law):
         rigid = plant.rigid
-        if getattr(rigid, "fast_engine", None) is None or getattr(rigid, "compiled_kernels", None) is None:
+        if getattr(rigid, "compiled_kernels", None) is None:
             return f"robot {getattr(rigid, 'name', type(rigid).__name__)!r} has no compiled simulator"
         if law.code is None:
             return f"law {law.name!r} has no compiled kernel"
@@ -162,11 +162,12 @@ class CompiledEngine(Engine):
         (:func:`rc3r._numba_cache.cold_start_policy`). Continuous runs always compile (their stiff
         laws take the python engine's SciPy Radau longer than the compilation)."""
         from ..._numba_cache import cold_start_policy
+        from .._fast import simulator
 
         if options.rate is None or cold_start_policy() == "compile":
             return None
         steps = round(options.duration * options.rate) * options.substeps
-        is_cached = getattr(plant.rigid.fast_engine, "is_cached", None)
+        is_cached = getattr(simulator(plant.rigid), "is_cached", None)
         if steps > COLD_MAX_SUBSTEPS or is_cached is None or is_cached("sampled"):
             return None
         return (f"its compiled integrator is not built yet and {steps} RK4 sub-steps take the python engine "

@@ -35,9 +35,9 @@ def bench_generated(robot: str = "ur5", quick: bool = False, seed: int = 0, prog
         return {"skipped": "casadi is not installed"}
     import pinocchio as pin
 
-    from .generated import GeneratedKernels
-    from .pinocchio import PinocchioRobot
-    from .pinocchio_bench import median_per_state, pin_rnea_cpp_estimate
+    from ..robots.generated import GeneratedKernels
+    from ..robots.pinocchio import PinocchioRobot
+    from .bench_generic import median_per_state, pin_rnea_cpp_estimate
 
     arm = PinocchioRobot.named(robot)
     report(f"generated kernels: {robot} (CasADi -> C; built once, cached on disk) ...")

@@ -31,11 +31,14 @@ def _usable_cpus() -> int:
         return os.cpu_count() or 1
 
 
-def bench_design(quick: bool = False, progress=None, workers: int | None = None) -> dict:
+def bench_design(main, quick: bool = False, progress=None, workers: int | None = None) -> dict:
     """Time a default ``rc3r design`` of the UR5 with a 0-3 kg payload at 1 kHz (module docstring).
 
     Parameters
     ----------
+    main : callable
+        The command line's entry point, ``main(argv) -> exit code`` (:func:`rc3r.cli.main`, handed over by
+        ``rc3r bench``: the experiments sit below the command line and never import it).
     quick : bool
         1 random plant and 0.5 s runs instead of the defaults (50 plants, 10 s).
     progress : callable, optional
@@ -51,8 +54,7 @@ def bench_design(quick: bool = False, progress=None, workers: int | None = None)
         ``eps``, ``n``, ``duration_s``, ``rate_hz``, ``workers``, ``cpus``, ``quick``.
     """
     from ..campaign.jobs import Job, run_job
-    from ..cli import main
-    from .verify import design_config
+    from ..design.verify import design_config
 
     report = progress or (lambda msg: None)
     n, duration, rate = (1, 0.5, 1000.0) if quick else (50, 10.0, 1000.0)

@@ -1,7 +1,7 @@
 """Integrators side by side on the same compiled closed loop (part of ``rc3r bench``).
 
 The compiled engine's continuous-time integrator is a hand-written Rosenbrock method
-(:mod:`rc3r.simulate.engines.compiled`, instantiated on the 3R's kernel supply :mod:`.engine`).
+(:mod:`rc3r.simulate.engines.compiled`, instantiated on the 3R's kernel supply :mod:`rc3r.robots.rr3.engine`).
 This section makes it justify itself against library solvers on the *same* compiled
 right-hand side (``closed_loop_xdot`` of that instantiation: closed-form plant, law kernel,
 trajectory) and the same tolerances (``rtol = 1e-6``, ``atol = 1e-8``):
@@ -32,11 +32,12 @@ __all__ = ["bench_integrators"]
 
 
 def _scipy(spec, x0, t_out, method: str, rtol: float, atol: float):
-    from ...plants import as_plant
+    from ..plants import as_plant
+    from ..simulate._fast import simulator
 
     p = spec.plant
     cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
-    eng = p.fast_engine
+    eng = simulator(p)
     _rhs = eng.instance.closed_loop_xdot
     args = (eng.constants(p), as_plant(p).pack(), code, cp, tp, p.n)
     _rhs(0.0, x0, *args)  # compile / load before timing
@@ -50,7 +51,7 @@ def _scipy(spec, x0, t_out, method: str, rtol: float, atol: float):
 def _rosenbrock(spec, jac_reuse: int, method: str = "ode23s"):
     from dataclasses import replace
 
-    from ...simulate import simulate
+    from ..simulate import simulate
 
     opts = replace(spec.options, jac_reuse=jac_reuse, engine="fast", method=method)
     simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01))  # warm
@@ -61,8 +62,8 @@ def _rosenbrock(spec, jac_reuse: int, method: str = "ode23s"):
 def bench_integrators(duration: float = 10.0, progress=None) -> dict:
     """Rosenbrock ode23s and ROS4 (J every step / kept 5 steps) and RODAS vs SciPy Radau and BDF on the FBL and
     robust perturbed runs."""
-    from ...simulate import _initial_state, continuous_method
-    from ...study import build_run
+    from ..simulate import _initial_state, continuous_method
+    from ..study import build_run
 
     report = progress or (lambda msg: None)
     out = {}

@@ -22,9 +22,9 @@ def bench_throughput(n_plants: int = 100, duration: float = 10.0, workers=(1, 2)
                      robot: str | None = None, progress=None, config: dict | None = None) -> dict:
     """Runs per minute of ``fbl,robust`` on ``n_plants`` plants for each worker count (``config``: the
     campaign's configuration, e.g. ``{"payload": {"mass": [0, 3]}, "simulation": {"rate": 1000}}``)."""
-    from .jobs import columns, run_job
-    from .runner import RunTable, run_many
-    from .studies import montecarlo_jobs
+    from ..campaign.jobs import columns, run_job
+    from ..campaign.runner import RunTable, run_many
+    from ..campaign.studies import montecarlo_jobs
 
     report = progress or (lambda msg: None)
     jobs = montecarlo_jobs(n_plants, seed, ["fbl", "robust"], duration=duration, robot=robot, config=config)

@@ -30,7 +30,7 @@ GENERIC_TARGETS = {
 def bench_generic(quick: bool = False, progress=None) -> dict:
     """Measure the generic-robot targets; returns ``{"regressor": {...}, "runs": {...}, "targets": {...}}``."""
     from ..study import build_run, execute
-    from . import load_robot
+    from ..robots import load_robot
 
     say = progress or (lambda msg: None)
     out = {"regressor": {}, "runs": {}}
