@@ -46,6 +46,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.uncertainty.bounds``            theta_0 and rho: the paper's method, certified exact ranges
 ``rc3r.uncertainty.payload``           exact bounds for an unknown payload on the last link
 ``rc3r.uncertainty.sampled``           sampled lower bound on max ||theta - theta_0||
+``rc3r.uncertainty.inertia``           M(q; theta) of a coefficient vector, linear in theta (ThetaModel)
 ``rc3r.uncertainty.ellipsoid``         plants drawn in an identification's ellipsoid (centre, random, boundary)
 ``rc3r.identify``                      identification from logs: bounds for the robust laws (docs/identification.md)
 ``rc3r.identify.log``                  logs (CSV, NPZ): loading and validation

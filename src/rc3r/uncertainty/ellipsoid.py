@@ -273,7 +273,7 @@ def lightest_theta(robot, theta0, P, arg: str, spec: str = "") -> np.ndarray:
     direction x at the configuration q, :math:`x^T M(q;\theta) x` (linear in theta: :math:`g^T\theta`), is
     smallest, :math:`\theta_0 - P^{-1} g / \sqrt{g^T P^{-1} g}`, moved s of the way from theta_0 (default 1).
     q and x are n comma-separated numbers each (``rc3r design``'s worst-plant search writes them)."""
-    from ..design.rule import ThetaModel
+    from .inertia import ThetaModel
 
     parts = arg.split(":")
     try:
