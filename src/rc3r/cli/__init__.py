@@ -187,6 +187,8 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("--urdf", help="a URDF: of the paper's 3R structure (closed form), or with --robot any, or "
                                   "with --generic any serial arm through Pinocchio")
     v.add_argument("--generic", action="store_true", help="check --urdf as a generic Pinocchio arm")
+    v.add_argument("--lock", type=_lock, action="append", metavar="JOINT=VALUE",
+                   help="fix a joint of the URDF at VALUE (repeatable; fingers, mimic joints; implies --generic)")
     v.add_argument("--samples", type=_positive(int), default=1000, help="random states (default 1000)")
     v.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="RNG seed (default 0)")
     v.add_argument("--json", action="store_true", help="one JSON object on stdout")

@@ -58,7 +58,8 @@ from .base import Robot, stack_states
 from .base_parameters import (BaseParameters, base_parameters, check_model, physical_issues,
                               standard_parameter_names)
 
-__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir"]
+__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir", "mimic_advice",
+           "lock_option"]
 
 #: Position limit [rad] given to ``continuous`` joints rebuilt as ``revolute``.
 CONTINUOUS_LIMIT = 1000.0
@@ -132,6 +133,50 @@ def _urdf_text(path: Path) -> tuple[str, tuple[str, ...], tuple[tuple[str, str],
             limit.set("effort", limit.get("effort", "1e6"))
             limit.set("velocity", limit.get("velocity", "1e3"))
     return ET.tostring(root, encoding="unicode"), tuple(continuous), tuple(mimic)
+
+
+def lock_option(joints) -> str:
+    """The command-line options that lock ``joints`` at 0: ``--lock a=0 --lock b=0``."""
+    return " ".join(f"--lock {j}=0" for j in joints)
+
+
+def mimic_advice(where, free) -> str:
+    """The one-line refusal of the unlocked ``<mimic>`` joints ``free`` ((joint, leader) pairs) of
+    ``where``: what each mimics and the command-line options that lock them (``--lock J=0`` of every
+    rc3r command that reads a URDF; in Python the ``lock={joint: value}`` argument)."""
+    what = ", joint ".join(f"'{j}' mimics '{leader}'" for j, leader in free)
+    return f"{where}: joint {what}: lock {'it' if len(free) == 1 else 'them'} with {lock_option(j for j, _ in free)}"
+
+
+#: Suffix given for the time of ``pinocchio.buildReducedModel`` to a frame that shares its name with a
+#: joint (:func:`_reduced_model`).
+_RENAMED = "@rc3r-frame"
+
+
+def _reduced_model(model, ids, q_ref):
+    """``pinocchio.buildReducedModel(model, ids, q_ref)``, also when a link and a joint share a name.
+
+    Pinocchio 3 looks the locked joints' frames up by name alone and refuses a name that two frames
+    carry ("Several frames match the filter"): the SO-100 of example-robot-data has a link and a
+    joint both named ``gripper``. The frames that are not joint frames but carry a joint's name are
+    renamed for the reduction and get their names back after it.
+    """
+    import pinocchio as pin
+
+    joints = set(model.names)
+    for frame in model.frames:
+        if frame.type != pin.FrameType.JOINT and frame.name in joints:
+            frame.name = frame.name + _RENAMED
+    try:
+        reduced = pin.buildReducedModel(model, ids, q_ref)
+    finally:
+        for frame in model.frames:
+            if frame.name.endswith(_RENAMED):
+                frame.name = frame.name[:-len(_RENAMED)]
+    for frame in reduced.frames:
+        if frame.name.endswith(_RENAMED):
+            frame.name = frame.name[:-len(_RENAMED)]
+    return reduced
 
 
 #: Below this many states, :meth:`PinocchioRobot.regressor` takes Pinocchio's path while the compiled
@@ -233,9 +278,9 @@ class PinocchioRobot(Robot):
             raise UrdfError(cpp.folded(f"Pinocchio cannot read URDF {path}",
                                        msg[0] if msg else type(exc).__name__)) from None
         lock = dict(lock or {})
-        for joint, leader in mimic:
-            if joint not in lock:
-                raise UrdfError(f"{path}: joint '{joint}' mimics '{leader}': lock it (lock={{'{joint}': 0.0}})")
+        free = [(joint, leader) for joint, leader in mimic if joint not in lock]
+        if free:
+            raise UrdfError(mimic_advice(path, free))
         if lock:
             unknown = [j for j in lock if not model.existJointName(j)]
             if unknown:
@@ -245,7 +290,7 @@ class PinocchioRobot(Robot):
                 if model.joints[jid].nq != 1:
                     raise UrdfError(f"{path}: cannot lock joint '{joint}': it is not 1-DoF")
                 q_ref[model.idx_qs[jid]] = float(value)
-            model = pin.buildReducedModel(model, ids, q_ref)
+            model = _reduced_model(model, ids, q_ref)
         if gravity is not None:
             model.gravity = pin.Motion(np.asarray(gravity, dtype=float), np.zeros(3))
         robot = cls(model, robot_name or model.name, label, urdf=str(path), seed=seed)
@@ -254,10 +299,12 @@ class PinocchioRobot(Robot):
 
     @classmethod
     def named(cls, name: str, **kwargs) -> "PinocchioRobot":
-        """An arm of example-robot-data by name (:data:`NAMED`: ``ur5``, ``panda`` with fingers locked)."""
+        """An arm of example-robot-data by name (:data:`NAMED`: ``ur5``, ``panda`` with fingers locked);
+        a ``lock`` keyword locks more joints (or the same at other values)."""
         if name not in NAMED:
             raise ConfigError(f"unknown named robot {name!r} (known: {', '.join(NAMED)})")
         rel, lock = NAMED[name]
+        lock = {**lock, **(kwargs.pop("lock", None) or {})}
         path = example_robot_data_dir() / rel
         if not path.is_file():
             raise UrdfError(f"example-robot-data has no {rel} under {path.parents[len(Path(rel).parts) - 1]}")
