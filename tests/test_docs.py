@@ -4,7 +4,10 @@
 * every ``docs/*.md`` page is in the table of contents (a glob catches new ones);
 * the notebook is stored without outputs (they come from executing it at build time) and
   never selects a matplotlib backend other than the notebook's inline one;
-* the docs never point at ``../shared``.
+* the docs never point at ``../shared``;
+* a newcomer finds the path from the paper to their own arm (issue 33 item 7): the README starts
+  with its two commands, then the path, then the reference; the first page's "Where next" and the
+  index lead to generic, identification, design and export before the method's pages.
 """
 from __future__ import annotations
 
@@ -94,3 +97,50 @@ def test_docs_do_not_point_at_shared():
     for path in DOCS.rglob("*"):
         if path.is_file() and "_build" not in path.parts and path.suffix in (".md", ".rst", ".py", ".ipynb"):
             assert "../shared" not in path.read_text(), path
+
+
+#: The path of a new user from the paper to their arm at their rate (README "The path", in order).
+PATH = ("rc3r paper", "rc3r verify-model", "rc3r identify", "rc3r bounds", "rc3r design", "rc3r montecarlo",
+        "rc3r export")
+
+
+def _sections(text: str) -> list[tuple[str, str]]:
+    """``(heading, body)`` of every ``## `` section of a Markdown text, in order (the preamble first)."""
+    parts = re.split(r"^## (.*)$", text, flags=re.M)
+    return [("", parts[0])] + list(zip(parts[1::2], parts[2::2]))
+
+
+def test_readme_starts_with_its_two_commands_then_the_path_then_the_reference():
+    """The README's first two code blocks are the set-up-and-run commands (the paper's, then the
+    tests'); its first section after them is the path, naming every step in order; the command
+    table comes after the path, and lists the path's commands first in the same order."""
+    readme = (DOCS.parent / "README.md").read_text()
+    blocks = re.findall(r"```bash\n(.*?)```", readme, flags=re.S)
+    assert "pip install -e ." in blocks[0] and "rc3r paper" in blocks[0], blocks[0]
+    assert "pip install" in blocks[1] and "pytest" in blocks[1], blocks[1]
+    sections = _sections(readme)
+    assert blocks[0] in sections[0][1] and blocks[1] in sections[0][1]
+    heading, body = sections[1]
+    assert heading.lower().startswith("the path"), heading
+    places = [body.find(f"`{cmd}") for cmd in PATH]
+    assert -1 not in places and places == sorted(places), dict(zip(PATH, places))
+    assert sections[2][0].lower().startswith("reference"), sections[2][0]
+    rows = [ln.split("`")[1].split()[1] for ln in sections[2][1].splitlines() if ln.startswith("| `rc3r")]
+    assert rows[:len(PATH) - 2] == ["paper", "verify-model", "excite", "identify", "bounds"], rows
+    in_path = [r for r in rows if f"rc3r {r}" in PATH]
+    assert in_path == [c.split()[1] for c in PATH], in_path
+
+
+def test_where_next_and_the_index_lead_to_the_pages_of_your_arm():
+    """docs/first-10-minutes.md "Where next" links generic, identification, design and export before any
+    page of the method; docs/index.md's table of contents puts them right after the first two pages."""
+    first = dict(_sections((DOCS / "first-10-minutes.md").read_text()))
+    where = next(body for heading, body in first.items() if "Where next" in heading)
+    links = re.findall(r"\]\(([\w-]+)\.md\)", where)
+    mine = ["generic", "identification", "design", "export"]
+    assert all(page in links for page in mine), links
+    assert max(links.index(p) for p in mine) < links.index("conventions"), links
+    index = (DOCS / "index.md").read_text()
+    entries = [ln.strip() for ln in re.search(r"```\{toctree\}\n(.*?)```", index, flags=re.S).group(1).splitlines()
+               if ln.strip() and not ln.strip().startswith(":")]
+    assert entries[:6] == ["first-10-minutes", "notebooks/quickstart", *mine], entries
