@@ -96,3 +96,21 @@ def test_bounds_and_design_lock_a_gripper_whose_link_has_its_name(capsys):
     cfg = design_config({}, urdf=so100, lock=[("gripper", 0.0)], payload=(0.0, 1.0))
     spec = build_run(controller="robust", config=cfg, rate=500.0, eps=1.0)
     assert spec.plant.n == 5 and spec.robot_model.locked == {"gripper": 0.0}
+
+
+def test_urdf_takes_a_portable_example_robot_data_name(capsys):
+    """Issue 33 item 5: ``--urdf erd:<path under example-robot-data's robots/>`` is that file (the name
+    design.toml stores; no venv path to type), and the robot's label is the portable name; ``erd:``
+    alone is one line, exit 2."""
+    import json
+
+    assert main(["bounds", "--urdf", "erd:ur_description/urdf/ur3_robot.urdf", "--payload", "0:1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["nominal"]["robot"] == "ur3" and out["nominal"]["n"] == 6
+    assert out["nominal"]["urdf"] == _erd("ur_description/urdf/ur3_robot.urdf")
+    from rc3r.robots import load_urdf_robot
+
+    assert load_urdf_robot("erd:ur_description/urdf/ur3_robot.urdf").label == "erd:ur_description/urdf/ur3_robot.urdf"
+    assert main(["bounds", "--urdf", "erd:", "--payload", "0:1"]) == EXIT["bad_input"]
+    err = capsys.readouterr().err
+    assert err.startswith("rc3r: error: ") and err.count("\n") == 1 and "after 'erd:'" in err

@@ -10,11 +10,11 @@ from pathlib import Path
 
 
 from ..errors import ConfigError, DivergenceError
-from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
+from ..io import atomic_savefig, atomic_write_json, atomic_write_text
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
-from ..study import build_run, execute
+from ..study import build_run, execute, read_config
 from . import EXIT
 from ._output import check_output_path, output_dir
 
@@ -144,7 +144,7 @@ def cmd_run(args) -> int:
     A diverged run writes its data up to the divergence, then raises
     :class:`~rc3r.errors.DivergenceError` (exit 3).
     """
-    cfg = {} if args.config is None else read_toml(args.config, "config file")
+    cfg = {} if args.config is None else read_config(args.config)
     spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
                      eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
                      payload=args.payload, payload_com=args.payload_com, config=cfg, **plant_options(args))

@@ -59,7 +59,7 @@ from .base_parameters import (BaseParameters, base_parameters, check_model, phys
                               standard_parameter_names)
 
 __all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir", "mimic_advice",
-           "lock_option"]
+           "lock_option", "ERD_PREFIX", "resolve_erd", "erd_name"]
 
 #: Position limit [rad] given to ``continuous`` joints rebuilt as ``revolute``.
 CONTINUOUS_LIMIT = 1000.0
@@ -97,6 +97,43 @@ def example_robot_data_dir() -> Path:
                 return base / sub
     raise UrdfError("example-robot-data is not installed (no share/example-robot-data/robots under "
                     f"{sys.prefix} or site-packages): pip install example-robot-data")
+
+
+#: A URDF of example-robot-data named portably: ``erd:<its path under the robots/ directory>``, e.g.
+#: ``erd:ur_description/urdf/ur3_robot.urdf``. Accepted wherever a URDF path is (``--urdf``, a config's
+#: ``urdf``), and written by ``rc3r design`` into ``design.toml`` in place of the absolute path inside
+#: the virtual environment, so that a design survives a new venv or another machine (docs/design.md).
+ERD_PREFIX = "erd:"
+
+
+def resolve_erd(path):
+    """The file a URDF name means: ``erd:REL`` is ``example_robot_data_dir() / REL``; any other
+    name (a path) is returned unchanged.
+
+    Raises
+    ------
+    UrdfError
+        ``erd:`` with no path after it, or example-robot-data not installed.
+    """
+    text = str(path) if isinstance(path, (str, Path)) else None
+    if text is None or not text.startswith(ERD_PREFIX):
+        return path
+    rel = text[len(ERD_PREFIX):].strip("/")
+    if not rel:
+        raise UrdfError(f"URDF {text!r}: give the path under example-robot-data's robots/ directory after "
+                        f"'{ERD_PREFIX}' (e.g. {ERD_PREFIX}ur_description/urdf/ur5_robot.urdf)")
+    return example_robot_data_dir() / rel
+
+
+def erd_name(path) -> str | None:
+    """``erd:REL`` if ``path`` is a file of the installed example-robot-data (REL under its robots/
+    directory, with ``/``), else None (also when example-robot-data is not installed)."""
+    try:
+        root = example_robot_data_dir().resolve()
+        rel = Path(path).resolve().relative_to(root)
+    except (UrdfError, ValueError, OSError, TypeError):
+        return None
+    return ERD_PREFIX + rel.as_posix()
 
 
 #: Numeric attributes checked before parsing: element tag -> attributes.
@@ -254,7 +291,8 @@ class PinocchioRobot(Robot):
     @classmethod
     def from_urdf(cls, path, lock: dict | None = None, robot_name: str | None = None,
                   label: str | None = None, gravity=None, seed: int = 0) -> "PinocchioRobot":
-        """Read a URDF; lock the joints of ``lock`` (``{"joint": value}``) at their values.
+        """Read a URDF (a path, or ``erd:REL`` for a file of example-robot-data: :data:`ERD_PREFIX`); lock
+        the joints of ``lock`` (``{"joint": value}``) at their values.
 
         ``continuous`` joints become ``revolute`` (module docstring). A ``<mimic>``
         joint must be locked. ``gravity`` (3,) [m/s^2] replaces Pinocchio's default
@@ -268,7 +306,7 @@ class PinocchioRobot(Robot):
         """
         import pinocchio as pin
 
-        path = require_file(path, "URDF", UrdfError)  # not found, not a file, a name too long ...
+        path = require_file(resolve_erd(path), "URDF", UrdfError)  # not found, not a file, a name too long ...
         text, continuous, mimic = _urdf_text(path)
         try:  # urdfdom prints its reason on fd 2: caught, and folded into the one line
             with native_stderr() as cpp:
@@ -293,7 +331,7 @@ class PinocchioRobot(Robot):
             model = _reduced_model(model, ids, q_ref)
         if gravity is not None:
             model.gravity = pin.Motion(np.asarray(gravity, dtype=float), np.zeros(3))
-        robot = cls(model, robot_name or model.name, label, urdf=str(path), seed=seed)
+        robot = cls(model, robot_name or model.name, label or erd_name(path), urdf=str(path), seed=seed)
         robot.locked, robot.continuous = {k: float(v) for k, v in lock.items()}, continuous
         return robot
 
