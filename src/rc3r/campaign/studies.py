@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from ..errors import ConfigError
+from ..simulate.verdict import VERDICTS
 from .jobs import Job, plant_seed
 
 __all__ = ["montecarlo_jobs", "montecarlo_summary", "eps_jobs", "eps_summary", "rate_jobs", "rate_map",
@@ -96,7 +97,8 @@ def _q(x, p):
 
 
 def montecarlo_summary(rows: list[dict]) -> dict:
-    """Per controller: runs, ok, diverged, max error quantiles, and the bound check (robust laws)."""
+    """Per controller: runs, ok (finished), diverged, the count of each verdict (``verdicts``: clean,
+    chattering, ...), max error quantiles, and the bound check (robust laws)."""
     out = {}
     for c in sorted({r["controller"] for r in rows}):
         rs = [r for r in rows if r["controller"] == c]
@@ -106,6 +108,8 @@ def montecarlo_summary(rows: list[dict]) -> dict:
         checked = [r for r in cov if r["exceeds_bound"] is not None]
         out[c] = {
             "runs": len(rs), "ok": len(ok), "diverged": len(rs) - len(ok),
+            "verdicts": {v: sum(1 for r in rs if r.get("verdict") == v) for v in VERDICTS
+                         if any(r.get("verdict") == v for r in rs)},
             "max_error_median": _q(err, 0.5), "max_error_p95": _q(err, 0.95),
             "max_error_max": float(err.max()) if err.size else None,
             "final_error_median": _q([r["final_error"] for r in ok], 0.5),

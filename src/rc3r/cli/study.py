@@ -174,12 +174,13 @@ def cmd_montecarlo(args) -> int:
         atomic_savefig(error_distribution(rows, f"max error per controller: {title}"), out / "error_cdf.png")
         atomic_savefig(error_vs_distance(rows, meta["radii"] or {}, f"max error vs ||theta - theta_0||: {title}"),
                        out / "error_vs_distance.png")
-        lines = ["| controller | runs | diverged | median max|e| [rad] | p95 | max | inside ball | bound exceeded |",
+        lines = ["| controller | runs | verdicts | median max|e| [rad] | p95 | max | inside ball | bound exceeded |",
                  "|---|---|---|---|---|---|---|---|"]
         for c, s in summary.items():
             exceeded = "-" if s["bound_exceeded"] is None else f"{s['bound_exceeded']} of {s['bound_checked']}"
             inside = "-" if s["inside_ball"] is None else str(s["inside_ball"])
-            lines.append(f"| {c} | {s['runs']} | {s['diverged']} | {_g(s['max_error_median'])} | "
+            verdicts = ", ".join(f"{k} {v}" for k, v in s["verdicts"].items()) or "-"
+            lines.append(f"| {c} | {s['runs']} | {verdicts} | {_g(s['max_error_median'])} | "
                          f"{_g(s['max_error_p95'])} | {_g(s['max_error_max'])} | {inside} | {exceeded} |")
         atomic_write_text(out / "summary.md", "\n".join(lines) + "\n")
         print("\n".join(lines))
