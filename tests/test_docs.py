@@ -16,6 +16,8 @@ import json
 import re
 from pathlib import Path
 
+import pytest
+
 import rc3r
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
@@ -144,3 +146,106 @@ def test_where_next_and_the_index_lead_to_the_pages_of_your_arm():
     entries = [ln.strip() for ln in re.search(r"```\{toctree\}\n(.*?)```", index, flags=re.S).group(1).splitlines()
                if ln.strip() and not ln.strip().startswith(":")]
     assert entries[:6] == ["first-10-minutes", "notebooks/quickstart", *mine], entries
+
+
+# ---- console transcripts checked against the real output (issue 33 item 4) ------------------------
+
+#: A console block whose output is checked: the comment ``<!-- transcript: SCRIPT ... -->`` right before
+#: its fence. SCRIPT runs exactly the block's ``$ rc3r ...`` commands, in the page's order.
+TRANSCRIPT = re.compile(r"<!-- transcript: (\S+)[^>]*-->\n```console\n(.*?)```", flags=re.S)
+
+#: What depends on the machine's load, masked on both sides: wall times, runs per minute.
+TIMING = (re.compile(r"wall [\d.]+ s"), re.compile(r"[\d.]+ s \([\d.]+ runs/min\)"))
+
+
+def transcripts() -> dict:
+    """SCRIPT -> [(page, command, expected stdout lines)] of every marked block, in page order."""
+    out: dict = {}
+    for page in sorted(DOCS.glob("*.md")):
+        for script, body in TRANSCRIPT.findall(page.read_text()):
+            for chunk in re.split(r"^\$ ", body, flags=re.M)[1:]:
+                command, *lines = chunk.rstrip("\n").split("\n")
+                out.setdefault(script, []).append((page.name, command, lines))
+    return out
+
+
+def script_commands(script: str) -> list[str]:
+    """The rc3r command lines of an example script (``$RC3R`` read as ``rc3r``)."""
+    text = (DOCS.parent / script).read_text()
+    return ["rc3r " + ln.split(None, 1)[1] for ln in text.splitlines() if ln.startswith("$RC3R ")]
+
+
+def _mask(line: str, cwd) -> str:
+    line = line.replace(f"{cwd}/", "")
+    for rx in TIMING:
+        line = rx.sub(lambda m: re.sub(r"[\d.]+", "#", m.group(0)), line)
+    return line
+
+
+def run_commands(commands, cwd) -> list[list[str]]:
+    """Each command's stdout lines (run in-process in ``cwd``, working directory prefix removed)."""
+    import contextlib
+    import io
+    import os
+    import shlex
+
+    from rc3r.cli import main
+
+    old, outputs = os.getcwd(), []
+    os.chdir(cwd)
+    try:
+        for command in commands:
+            with contextlib.redirect_stdout(io.StringIO()) as buf:
+                code = main(shlex.split(command)[1:])
+            text = buf.getvalue()
+            assert code == 0, (command, code, text)
+            outputs.append([ln.replace(f"{cwd}/", "") for ln in text.rstrip("\n").split("\n")])
+    finally:
+        os.chdir(old)
+    return outputs
+
+
+@pytest.mark.slow
+def test_every_console_transcript_marked_as_checked_is_what_its_commands_print(tmp_path):
+    """The marked console blocks of docs/*.md (docs/identification.md's worked example) hold exactly the
+    commands of their example script, in its order, and each command's stdout line for line (wall times
+    and runs per minute masked; progress lines go to stderr and are not in the transcripts). Rewrite them
+    after a change of output with ``python tests/test_docs.py --update``."""
+    found = transcripts()
+    assert "examples/identified_design.sh" in found, "docs/identification.md lost its checked transcript"
+    for script, blocks in found.items():
+        assert [cmd for _, cmd, _ in blocks] == script_commands(script), script
+        work = tmp_path / Path(script).stem
+        work.mkdir()
+        got = run_commands([cmd for _, cmd, _ in blocks], work)
+        for (page, cmd, want), lines in zip(blocks, got):
+            assert [_mask(ln, work) for ln in lines] == [_mask(ln, work) for ln in want], f"{page}: $ {cmd}"
+
+
+def _update() -> None:
+    """Rewrite every marked transcript with its commands' real output (run in a temporary directory)."""
+    import tempfile
+
+    for script, blocks in transcripts().items():
+        with tempfile.TemporaryDirectory() as tmp:
+            got = run_commands([cmd for _, cmd, _ in blocks], Path(tmp).resolve())
+        outputs = {cmd: lines for (_, cmd, _), lines in zip(blocks, got)}
+
+        def body(match):
+            cmds = [c.split("\n", 1)[0] for c in re.split(r"^\$ ", match.group(2), flags=re.M)[1:]]
+            new = "".join(f"$ {c}\n" + "".join(f"{ln}\n" for ln in outputs[c]) for c in cmds)
+            return match.group(0).replace(match.group(2), new)
+
+        for page in sorted({p for p, _, _ in blocks}):
+            path = DOCS / page
+            path.write_text(TRANSCRIPT.sub(lambda m: body(m) if m.group(1) == script else m.group(0),
+                                           path.read_text()))
+            print(f"updated {path}")
+
+
+if __name__ == "__main__":
+    import sys
+
+    if sys.argv[1:] != ["--update"]:
+        sys.exit("usage: python tests/test_docs.py --update  (rewrite the checked console transcripts)")
+    _update()
