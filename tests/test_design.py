@@ -397,7 +397,8 @@ def test_design_toml_names_packaged_urdfs_by_name_and_user_files_relative_to_its
 
     from rc3r.design.verify import design_config
     from rc3r.robots.pinocchio import example_robot_data_dir
-    from rc3r.study import build_run, read_config
+    from rc3r.io import read_config
+    from rc3r.study import build_run
 
     ur3 = example_robot_data_dir() / "ur_description/urdf/ur3_robot.urdf"
     project = tmp_path / "project"
@@ -424,7 +425,8 @@ def test_old_design_tomls_with_absolute_paths_still_load(tmp_path, monkeypatch):
     only exists from the working directory (configs written before names were relative to their file)
     is kept."""
     from rc3r.robots.pinocchio import example_robot_data_dir
-    from rc3r.study import build_run, read_config, resolve_config_paths
+    from rc3r.io import read_config, resolve_config_paths
+    from rc3r.study import build_run
 
     ur3 = example_robot_data_dir() / "ur_description/urdf/ur3_robot.urdf"
     old = tmp_path / "design.toml"

@@ -39,8 +39,7 @@ from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
 from .uncertainty import certified_bounds, certified_radius, load_box, paper_bounds, perturb
 
-__all__ = ["RunSpec", "build_run", "execute", "resolve_box", "CONFIG_KEYS", "PATH_KEYS", "read_config",
-           "resolve_config_paths", "portable_config"]
+__all__ = ["RunSpec", "build_run", "execute", "resolve_box", "CONFIG_KEYS"]
 
 
 @dataclass(frozen=True)
@@ -80,69 +79,6 @@ CONFIG_KEYS = {
     "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "period_rtol", "period_atol", "nsub",
                    "sampled_method", "engine", "jac_reuse", "method", "max_steps", "q_max", "qd_max", "u_max"),
 }
-
-
-#: The keys of a run configuration that name files, as ``(table, key)`` (``""``: the top level); the
-#: plant's ``spec`` only when it names a URDF (ends in ``.urdf``).
-PATH_KEYS = (("", "urdf"), ("", "box"), ("", "bounds"), ("plant", "urdf"), ("plant", "box"), ("plant", "spec"))
-
-
-def _path_entries(cfg: dict):
-    """``(table dict, key, value)`` of every file the configuration ``cfg`` names (:data:`PATH_KEYS`)."""
-    for table, key in PATH_KEYS:
-        where = cfg if table == "" else cfg.get(table)
-        value = where.get(key) if isinstance(where, dict) else None
-        if isinstance(value, str) and value and (key != "spec" or value.endswith(".urdf")):
-            yield where, key, value
-
-
-def resolve_config_paths(cfg: dict, base) -> dict:
-    """``cfg`` with every relative file name (:data:`PATH_KEYS`) read relative to the directory ``base``
-    of the configuration file: ``base / name``, unless only ``name`` exists from the working directory
-    (configurations written before names were relative to their file). Absolute names and
-    ``erd:`` names (:data:`rc3r.robots.pinocchio.ERD_PREFIX`, resolved where the URDF is read) are
-    kept. Returns a copy."""
-    import copy
-    import os
-
-    from .robots.pinocchio import ERD_PREFIX
-
-    out = copy.deepcopy(cfg)
-    for where, key, value in _path_entries(out):
-        if value.startswith(ERD_PREFIX) or Path(value).is_absolute():
-            continue
-        beside = Path(os.path.abspath(Path(base) / value))  # "../arm.urdf" without the ".."
-        if beside.exists() or not Path(value).exists():
-            where[key] = str(beside)
-    return out
-
-
-def portable_config(cfg: dict, base) -> dict:
-    """``cfg`` with the files it names written portably for a configuration file in the directory
-    ``base``: a URDF of example-robot-data as ``erd:REL`` (:func:`rc3r.robots.pinocchio.erd_name`),
-    any other file relative to ``base`` (``os.path.relpath``); :func:`resolve_config_paths` reads
-    them back. Returns a copy."""
-    import copy
-    import os
-
-    from .robots.pinocchio import ERD_PREFIX, erd_name
-
-    out = copy.deepcopy(cfg)
-    base = Path(base).resolve()
-    for where, key, value in _path_entries(out):
-        if value.startswith(ERD_PREFIX):
-            continue
-        name = erd_name(value) if key in ("urdf", "spec") else None
-        where[key] = name or Path(os.path.relpath(Path(value).resolve(), base)).as_posix()
-    return out
-
-
-def read_config(path) -> dict:
-    """A run configuration TOML (``--config``), its file names resolved relative to the file
-    (:func:`resolve_config_paths`)."""
-    from .io import read_toml
-
-    return resolve_config_paths(read_toml(path, "config file"), Path(path).parent)
 
 
 def _check_keys(table, allowed, where: str) -> dict:
@@ -560,7 +496,7 @@ def _urdf_robot_cached(urdf, lock: dict | None = None):
     import os
 
     from .robots import load_urdf_robot
-    from .robots.pinocchio import resolve_erd
+    from .robots.urdf_names import resolve_erd
 
     urdf = resolve_erd(urdf)  # erd:REL -> the file of example-robot-data
     try:

@@ -92,7 +92,8 @@ def cmd_design(args) -> int:
     from ..design.report import design_figure, design_markdown, design_toml
     from ..design.verify import design_config, verify_design
     from ..campaign.runner import prepare
-    from ..study import build_run, read_config
+    from ..io import read_config
+    from ..study import build_run
     from .run import announce_compile, plant_options
 
     if args.scheduler is not None and args.workers is not None:

@@ -18,7 +18,8 @@ def cmd_export(args) -> int:
     from ..export.c import check_exportable, regressor_source
     from ..export.harness import FILES, write_export
     from ..provenance import provenance
-    from ..study import build_run, read_config
+    from ..io import read_config
+    from ..study import build_run
     from ._output import check_output_path, output_dir
     from .run import plant_options
 

@@ -10,11 +10,11 @@ from pathlib import Path
 
 
 from ..errors import ConfigError, DivergenceError
-from ..io import atomic_savefig, atomic_write_json, atomic_write_text
+from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_config
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
-from ..study import build_run, execute, read_config
+from ..study import build_run, execute
 from . import EXIT
 from ._output import check_output_path, output_dir
 

@@ -127,7 +127,7 @@ def _g(x) -> str:
 def _config(args) -> dict:
     """The campaign's configuration: --config, then the arm and plant options of the command line on top
     (every job gets them through its configuration: docs/control.md, "Plants")."""
-    from ..study import read_config
+    from ..io import read_config
     from .run import plant_options
 
     cfg = {} if args.config is None else read_config(args.config)

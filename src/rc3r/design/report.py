@@ -22,7 +22,7 @@ def design_toml(result, header: str = "", base=None) -> str:
         More comment lines for the top (the command that made it).
     base : path-like, optional
         The directory ``design.toml`` is written to: the files the design names are then written
-        portably (:func:`rc3r.study.portable_config`: a URDF of example-robot-data as
+        portably (:func:`rc3r.io.portable_config`: a URDF of example-robot-data as
         ``erd:REL``, any other file relative to ``base``); without it, as the config has them.
 
     Returns
@@ -31,7 +31,7 @@ def design_toml(result, header: str = "", base=None) -> str:
         The TOML text.
     """
     from ..identify.bounds_file import to_toml
-    from ..study import portable_config
+    from ..io import portable_config
 
     config = result.config if base is None else portable_config(result.config, base)
     cfg = {k: v for k, v in config.items() if k not in ("gains", "simulation")}

@@ -45,7 +45,6 @@ by Pinocchio, locked joints by ``pinocchio.buildReducedModel``).
 from __future__ import annotations
 
 import math
-import sys
 import xml.etree.ElementTree as ET
 from functools import cached_property
 from pathlib import Path
@@ -55,11 +54,14 @@ import numpy as np
 from ..errors import ConfigError, ParameterError, UrdfError
 from ..io import MAGNITUDE_NOTE, native_stderr, number_problem, require_file
 from .base import Robot, stack_states
+from .urdf_names import ERD_PREFIX, erd_name, example_robot_data_dir, mimic_advice, resolve_erd
 from .base_parameters import (BaseParameters, base_parameters, check_model, physical_issues,
                               standard_parameter_names)
 
-__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir", "mimic_advice",
-           "lock_option", "ERD_PREFIX", "resolve_erd", "erd_name"]
+#: ``example_robot_data_dir``, ``ERD_PREFIX``, ``resolve_erd``, ``erd_name``, ``mimic_advice`` live in
+#: :mod:`rc3r.robots.urdf_names` (imported here, where they were first defined).
+__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir", "ERD_PREFIX",
+           "resolve_erd", "erd_name"]
 
 #: Position limit [rad] given to ``continuous`` joints rebuilt as ``revolute``.
 CONTINUOUS_LIMIT = 1000.0
@@ -73,67 +75,6 @@ NAMED = {
     "ur5": ("ur_description/urdf/ur5_robot.urdf", {}),
     "panda": ("panda_description/urdf/panda.urdf", {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}),
 }
-
-
-def example_robot_data_dir() -> Path:
-    """The ``robots/`` directory of the installed example-robot-data (6.x: files only, no loader).
-
-    Looked for as ``[cmeel.prefix/]share/example-robot-data/robots`` under the
-    distribution's install location, ``sys.prefix`` and every ``sys.path`` entry.
-    """
-    import site
-
-    bases = []
-    try:
-        from importlib.metadata import distribution
-
-        bases.append(Path(distribution("example-robot-data").locate_file("")))
-    except Exception:  # not installed as a distribution: fall back to the prefixes
-        pass
-    bases += [Path(sys.prefix), *map(Path, site.getsitepackages()), *map(Path, filter(None, sys.path))]
-    for base in bases:
-        for sub in ("cmeel.prefix/share/example-robot-data/robots", "share/example-robot-data/robots"):
-            if (base / sub).is_dir():
-                return base / sub
-    raise UrdfError("example-robot-data is not installed (no share/example-robot-data/robots under "
-                    f"{sys.prefix} or site-packages): pip install example-robot-data")
-
-
-#: A URDF of example-robot-data named portably: ``erd:<its path under the robots/ directory>``, e.g.
-#: ``erd:ur_description/urdf/ur3_robot.urdf``. Accepted wherever a URDF path is (``--urdf``, a config's
-#: ``urdf``), and written by ``rc3r design`` into ``design.toml`` in place of the absolute path inside
-#: the virtual environment, so that a design survives a new venv or another machine (docs/design.md).
-ERD_PREFIX = "erd:"
-
-
-def resolve_erd(path):
-    """The file a URDF name means: ``erd:REL`` is ``example_robot_data_dir() / REL``; any other
-    name (a path) is returned unchanged.
-
-    Raises
-    ------
-    UrdfError
-        ``erd:`` with no path after it, or example-robot-data not installed.
-    """
-    text = str(path) if isinstance(path, (str, Path)) else None
-    if text is None or not text.startswith(ERD_PREFIX):
-        return path
-    rel = text[len(ERD_PREFIX):].strip("/")
-    if not rel:
-        raise UrdfError(f"URDF {text!r}: give the path under example-robot-data's robots/ directory after "
-                        f"'{ERD_PREFIX}' (e.g. {ERD_PREFIX}ur_description/urdf/ur5_robot.urdf)")
-    return example_robot_data_dir() / rel
-
-
-def erd_name(path) -> str | None:
-    """``erd:REL`` if ``path`` is a file of the installed example-robot-data (REL under its robots/
-    directory, with ``/``), else None (also when example-robot-data is not installed)."""
-    try:
-        root = example_robot_data_dir().resolve()
-        rel = Path(path).resolve().relative_to(root)
-    except (UrdfError, ValueError, OSError, TypeError):
-        return None
-    return ERD_PREFIX + rel.as_posix()
 
 
 #: Numeric attributes checked before parsing: element tag -> attributes.
@@ -170,19 +111,6 @@ def _urdf_text(path: Path) -> tuple[str, tuple[str, ...], tuple[tuple[str, str],
             limit.set("effort", limit.get("effort", "1e6"))
             limit.set("velocity", limit.get("velocity", "1e3"))
     return ET.tostring(root, encoding="unicode"), tuple(continuous), tuple(mimic)
-
-
-def lock_option(joints) -> str:
-    """The command-line options that lock ``joints`` at 0: ``--lock a=0 --lock b=0``."""
-    return " ".join(f"--lock {j}=0" for j in joints)
-
-
-def mimic_advice(where, free) -> str:
-    """The one-line refusal of the unlocked ``<mimic>`` joints ``free`` ((joint, leader) pairs) of
-    ``where``: what each mimics and the command-line options that lock them (``--lock J=0`` of every
-    rc3r command that reads a URDF; in Python the ``lock={joint: value}`` argument)."""
-    what = ", joint ".join(f"'{j}' mimics '{leader}'" for j, leader in free)
-    return f"{where}: joint {what}: lock {'it' if len(free) == 1 else 'them'} with {lock_option(j for j, _ in free)}"
 
 
 #: Suffix given for the time of ``pinocchio.buildReducedModel`` to a frame that shares its name with a

@@ -321,9 +321,20 @@ _FILE_STATUS = {"finished": "ok"}
 
 
 def file_status(res) -> str:
-    """The ``status`` field of ``metrics.json`` and ``runs.csv``: ``res.outcome`` in the words those files have
-    always used (``"ok"`` for ``"finished"``, ``"diverged"``, ``"interrupted"``), kept for their readers
-    (``rc3r montecarlo --resume`` reads older rows). What a run means is its verdict."""
+    """The ``status`` field of ``metrics.json`` and ``runs.csv``.
+
+    Parameters
+    ----------
+    res : SimResult
+        A run.
+
+    Returns
+    -------
+    str
+        ``res.outcome`` in the words those files have always used (``"ok"`` for ``"finished"``,
+        ``"diverged"``, ``"interrupted"``), kept for their readers (``rc3r montecarlo --resume`` reads
+        older rows). What a run means is its verdict (:attr:`SimResult.verdict`).
+    """
     return _FILE_STATUS.get(res.outcome, res.outcome)
 
 

@@ -42,8 +42,20 @@ def _layer(res, eps):
 
 
 def verdict_of(res, tolerance=None) -> dict:
-    """:func:`rc3r.simulate.verdict.verdict` of ``res`` with the plant's torque and joint limits recorded in
-    ``res.robot["effects"]`` (``tolerance`` [rad], default :data:`~rc3r.simulate.verdict.TOLERANCE`)."""
+    """The verdict of a run with its plant's recorded limits.
+
+    Parameters
+    ----------
+    res : rc3r.simulate.SimResult
+        A run; the plant's torque and joint limits are read from ``res.robot["effects"]``.
+    tolerance : float, optional
+        Tracking tolerance [rad] (default :data:`~rc3r.simulate.verdict.TOLERANCE`).
+
+    Returns
+    -------
+    dict
+        :func:`rc3r.simulate.verdict.verdict`'s dict (``verdict``, ``tolerance_met``, ...).
+    """
     return _verdict(res, tolerance)
 
 
