@@ -47,7 +47,7 @@ def main() -> None:
             spec = build_run(robot=arm, payload=(0.0, 3.0), controller="robust", duration=args.duration)
             for method in ("ode23s", "rodas"):
                 r = simulate(spec.plant, spec.law, spec.trajectory, replace(spec.options, method=method))
-                print(f"{arm:8s} robust, 0-3 kg, {args.duration:g} s continuous, {method:6s} {r.engine:6s} {r.status:8s} "
+                print(f"{arm:8s} robust, 0-3 kg, {args.duration:g} s continuous, {method:6s} {r.engine:6s} {r.verdict:8s} "
                       f"steps {r.steps:7d} rhs {r.rhs_evals:8d} wall {r.wall_time_s:6.2f} s max|e| {np.abs(r.e).max():.4g} rad",
                       flush=True)
         return
@@ -83,7 +83,7 @@ def main() -> None:
             du = np.abs(r.u[:m] - ref.u[:m]).max() / umax
             print(f"{name:24s} {method:6s} {'<-' if method == chosen else '':4s} {r.steps:7d} {r.rejected_steps:8d} "
                   f"{r.rhs_evals:8d} {r.wall_time_s * 1e3:5.0f} ms {dq:8.1e} {dqd:8.1e} {du:8.1e}"
-                  + ("" if r.ok else f"  {r.status}"), flush=True)
+                  + ("" if r.ok else f"  {r.verdict}"), flush=True)
         print(f"{name:24s} yardstick vs Radau (rtol 1e-10): dq {np.abs(sol.y[:p.n].T - ref.q).max():.1e}", flush=True)
 
 

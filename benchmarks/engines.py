@@ -66,7 +66,7 @@ def main(argv=None) -> int:
         _run(replace(spec, options=replace(spec.options, duration=0.01)))  # warm: compile or cache load
         res, cpu = _run(spec)
         rows[engine] = (res, cpu)
-        print(f"{engine:>8}: {res.status}, {res.t.size - 1} control steps stored, wall {res.wall_time_s:.3f} s, "
+        print(f"{engine:>8}: {res.verdict}, {res.t.size - 1} control steps stored, wall {res.wall_time_s:.3f} s, "
               f"cpu {cpu:.3f} s", flush=True)
     res = rows["compiled"][0]
     idx = np.linspace(0, res.t.size - 1, min(res.t.size, 20000)).astype(int)

@@ -64,7 +64,7 @@ def main(argv=None) -> int:
                 runs.append(("reference", ref))
             for m, r in runs:
                 diff = "" if ref is None or r is ref or len(r.q) != len(ref.q) else f"{np.abs(r.q - ref.q).max():.3g}"
-                print(f"| {arm} | {rate:g} | {lam} | {auto} | {m} ({r.status}) | {r.options.nsub} | {r.rhs_evals} "
+                print(f"| {arm} | {rate:g} | {lam} | {auto} | {m} ({r.verdict}) | {r.options.nsub} | {r.rhs_evals} "
                       f"| {r.wall_time_s:.3f} | {np.abs(r.e).max():.4g} | {diff} |", flush=True)
     return 0
 

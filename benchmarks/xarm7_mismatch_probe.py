@@ -33,9 +33,9 @@ def main(argv=None) -> int:
                 spec = rc3r.build_run(urdf=urdf, controller=ctl, rate=rate, duration=args.duration,
                                       payload=(0.0, 3.0), plant=plant)
                 res = rc3r.simulate(spec.true_plant or spec.plant, spec.law, spec.trajectory, spec.options)
-                err = f"{float(np.abs(res.e).max()):.3g}" if res.status == "ok" else "-"
+                err = f"{float(np.abs(res.e).max()):.3g}" if res.ok else "-"
                 eps = getattr(spec.law, "eps", None)
-                print(f"{ctl:6s} {rate:g} Hz  {plant:10s} {res.status:9s} max|e| {err:>9s} rad  "
+                print(f"{ctl:6s} {rate:g} Hz  {plant:10s} {res.verdict:14s} max|e| {err:>9s} rad  "
                       f"eps {'-' if eps is None else f'{eps:.4g}'}  {res.message}")
     return 0
 

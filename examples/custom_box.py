@@ -58,7 +58,7 @@ def main(box_path: str | None = None, duration: float = 5.0, plant: str = "rando
     err = np.array(m["max_abs_error"])
     print(f"robust law on plant '{spec.plant.label}' (||theta - theta_0|| = "
           f"{np.linalg.norm(spec.plant.theta - spec.law.theta):.4g} <= rho = {spec.law.rho:.6g}: {inside}), "
-          f"{duration:g} s: {res.message}")
+          f"{duration:g} s: {res.verdict if res.ok else res.message}")
     print(f"max|e|          = {' '.join(f'{x:.3g}' for x in err)} rad")
     print(f"predicted bound = {' '.join(f'{x:.3g}' for x in bound)} rad (Spong's UUB, M eigenvalues in "
           f"[{m_lo:.3g}, {m_hi:.3g}] kg m^2)")

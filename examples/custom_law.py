@@ -76,7 +76,7 @@ def main(duration: float = 2.0) -> dict:
         err, chat = float(np.abs(res.e).max()), max(run_metrics(res)["chattering"])
         out[label] = err
         print(f"{label:>34} on '{res.plant}' ({res.engine} engine, {res.mode} {res.options.rate:g} Hz, "
-              f"{duration:g} s): {res.message}, max|e| = {err:.3g} rad, chattering {chat:.3g} N m/s; {why}")
+              f"{duration:g} s): {res.verdict if res.ok else res.message}, max|e| = {err:.3g} rad, chattering {chat:.3g} N m/s; {why}")
     return out
 
 

@@ -36,7 +36,7 @@ def main(duration: float = 10.0, figure: str | None = None) -> dict:
         res, m = rc3r.execute(spec)
         out[law], results[law] = m, res
         print(f"{law:>6} on '{Path(res.plant).name}' ({res.engine} engine, {res.mode} {res.options.rate:g} Hz, "
-              f"{duration:g} s): {res.message}; max|e| = {max(m['max_abs_error']):.3g} rad, "
+              f"{duration:g} s): {res.verdict if res.ok else res.message}; max|e| = {max(m['max_abs_error']):.3g} rad, "
               f"chattering {sum(m['chattering']):.3g} N m/s, rho = {spec.model['rho'] or 0:.4g}, wall "
               f"{m['wall_time_s']:.2f} s")
     ratio = max(out["fbl"]["max_abs_error"]) / max(out["robust"]["max_abs_error"])

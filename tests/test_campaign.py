@@ -23,6 +23,7 @@ from rc3r.campaign import Job, RunTable, classify, columns, montecarlo_jobs, pla
 from rc3r.cli import main
 from rc3r.controllers import Robust
 from rc3r.controllers.guarantee import covers, error_bound, lyapunov_margin
+from rc3r.simulate.verdict import VERDICTS
 
 RC3R = [str(Path(sys.executable).parent / "rc3r")]
 MC = ["--n", "4", "--duration", "1", "--controllers", "fbl,robust"]
@@ -133,6 +134,8 @@ def test_montecarlo_writes_table_summary_and_figures(tmp_path):
         rs = [r for r in rows if r["controller"] == c]
         err = [r["max_error"] for r in rs if r["status"] == "ok"]
         assert (s["runs"], s["ok"], s["diverged"]) == (4, len(err), 4 - len(err))
+        counts = {v: [r["verdict"] for r in rs].count(v) for v in VERDICTS if any(r["verdict"] == v for r in rs)}
+        assert s["verdicts"] == counts and sum(counts.values()) == 4  # the verdicts of runs.csv, in VERDICTS order
         assert s["max_error_median"] == pytest.approx(statistics.median(err), rel=1e-12)
         assert s["max_error_p95"] == pytest.approx(_p95(err), rel=1e-12)
         assert s["max_error_max"] == max(err)

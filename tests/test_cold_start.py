@@ -108,7 +108,7 @@ def test_cold_python_run_equals_the_compiled_one(cold):
 
     res_fast = rc3r.simulate(spec.true_plant or spec.plant, spec.law, spec.trajectory,
                              replace(spec.options, engine="fast"), loop=spec.loop, model=spec.robot_model)
-    assert res_fast.engine == "fast" and res_py.status == res_fast.status == "ok"
+    assert res_fast.engine == "fast" and res_py.outcome == res_fast.outcome == "finished"
     assert np.max(np.abs(res_py.q - res_fast.q)) < 1e-9
 
 

@@ -374,3 +374,72 @@ def test_scheduled_k_lifts_the_bandwidth_a_constant_k_caps():
     assert isinstance(full.gains("robust")["K"][0], list)  # a matrix in design.toml
     with pytest.raises(ParameterError, match="coupling must be"):
         fast_design(sp, 500.0, rho=1.0, coupling="yes")
+
+
+# ---- design.toml survives a new venv, a moved project, another machine (issue 33 item 5) ----------
+
+def _write_design(cfg: dict, directory) -> str:
+    """design.toml of a design made for ``cfg`` (gains stand in for a verification), written into ``directory``."""
+    from types import SimpleNamespace
+
+    from rc3r.design.report import design_toml
+
+    fake = SimpleNamespace(config=cfg, rate=1000.0,
+                           gains=lambda: {"robust": {"K": [5.0] * 6, "Lambda": 10.0, "eps": 1.0}})
+    text = design_toml(fake, "made by: a test", base=directory)
+    (directory / "design.toml").write_text(text)
+    return text
+
+
+def test_design_toml_names_packaged_urdfs_by_name_and_user_files_relative_to_itself(tmp_path, monkeypatch):
+    """A URDF of example-robot-data is written ``erd:<path under its robots/>`` (never the venv's absolute
+    path), a URDF of the user relative to design.toml; after the project moves (and from another working
+    directory) ``read_config`` + ``build_run`` (what ``rc3r run --config`` does) read the same arm."""
+    import shutil
+    import sys
+
+    from rc3r.design.verify import design_config
+    from rc3r.robots.pinocchio import example_robot_data_dir
+    from rc3r.io import read_config
+    from rc3r.study import build_run
+
+    ur3 = example_robot_data_dir() / "ur_description/urdf/ur3_robot.urdf"
+    project = tmp_path / "project"
+    (project / "designs" / "erd").mkdir(parents=True)
+    (project / "designs" / "own").mkdir()
+    shutil.copy(ur3, project / "arm.urdf")
+    packaged = _write_design(design_config({}, urdf=str(ur3), payload=(0.0, 1.0)), project / "designs" / "erd")
+    own = _write_design(design_config({}, urdf=str(project / "arm.urdf"), payload=(0.0, 1.0)),
+                        project / "designs" / "own")
+    assert 'urdf = "erd:ur_description/urdf/ur3_robot.urdf"' in packaged and sys.prefix not in packaged
+    assert 'urdf = "../../arm.urdf"' in own and str(tmp_path) not in own
+    moved = tmp_path / "elsewhere" / "moved"
+    shutil.move(str(project), str(moved))
+    monkeypatch.chdir(tmp_path)
+    for sub, want in (("erd", ur3), ("own", moved / "arm.urdf")):
+        cfg = read_config(moved / "designs" / sub / "design.toml")
+        spec = build_run(controller="robust", config=cfg, rate=1000.0)
+        assert spec.robot_model.n == 6 and spec.robot_model.robot_name == "ur3"
+        assert spec.robot_model.urdf == str(want.resolve())
+
+
+def test_old_design_tomls_with_absolute_paths_still_load(tmp_path, monkeypatch):
+    """A design.toml written before (``urdf`` the absolute path) reads the same arm; a relative name that
+    only exists from the working directory (configs written before names were relative to their file)
+    is kept."""
+    from rc3r.robots.pinocchio import example_robot_data_dir
+    from rc3r.io import read_config, resolve_config_paths
+    from rc3r.study import build_run
+
+    ur3 = example_robot_data_dir() / "ur_description/urdf/ur3_robot.urdf"
+    old = tmp_path / "design.toml"
+    old.write_text(f'urdf = "{ur3}"\nperturbed = true\n[payload]\nmass = [0.0, 1.0]\n'
+                   "[gains.robust]\nK = [5.0, 5.0, 5.0, 5.0, 5.0, 5.0]\nLambda = 10.0\neps = 1.0\n"
+                   "[simulation]\nrate = 1000.0\n")
+    spec = build_run(controller="robust", config=read_config(old))
+    assert spec.robot_model.urdf == str(ur3) and spec.robot_model.n == 6
+    (tmp_path / "cwd").mkdir()
+    (tmp_path / "cwd" / "legacy.toml").write_text("")
+    monkeypatch.chdir(tmp_path / "cwd")
+    assert resolve_config_paths({"box": "legacy.toml"}, tmp_path) == {"box": "legacy.toml"}
+    assert resolve_config_paths({"box": "nowhere.toml"}, tmp_path) == {"box": str(tmp_path / "nowhere.toml")}

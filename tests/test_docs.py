@@ -4,7 +4,10 @@
 * every ``docs/*.md`` page is in the table of contents (a glob catches new ones);
 * the notebook is stored without outputs (they come from executing it at build time) and
   never selects a matplotlib backend other than the notebook's inline one;
-* the docs never point at ``../shared``.
+* the docs never point at ``../shared``;
+* a newcomer finds the path from the paper to their own arm (issue 33 item 7): the README starts
+  with its two commands, then the path, then the reference; the first page's "Where next" and the
+  index lead to generic, identification, design and export before the method's pages.
 """
 from __future__ import annotations
 
@@ -12,6 +15,8 @@ import importlib
 import json
 import re
 from pathlib import Path
+
+import pytest
 
 import rc3r
 
@@ -94,3 +99,153 @@ def test_docs_do_not_point_at_shared():
     for path in DOCS.rglob("*"):
         if path.is_file() and "_build" not in path.parts and path.suffix in (".md", ".rst", ".py", ".ipynb"):
             assert "../shared" not in path.read_text(), path
+
+
+#: The path of a new user from the paper to their arm at their rate (README "The path", in order).
+PATH = ("rc3r paper", "rc3r verify-model", "rc3r identify", "rc3r bounds", "rc3r design", "rc3r montecarlo",
+        "rc3r export")
+
+
+def _sections(text: str) -> list[tuple[str, str]]:
+    """``(heading, body)`` of every ``## `` section of a Markdown text, in order (the preamble first)."""
+    parts = re.split(r"^## (.*)$", text, flags=re.M)
+    return [("", parts[0])] + list(zip(parts[1::2], parts[2::2]))
+
+
+def test_readme_starts_with_its_two_commands_then_the_path_then_the_reference():
+    """The README's first two code blocks are the set-up-and-run commands (the paper's, then the
+    tests'); its first section after them is the path, naming every step in order; the command
+    table comes after the path, and lists the path's commands first in the same order."""
+    readme = (DOCS.parent / "README.md").read_text()
+    blocks = re.findall(r"```bash\n(.*?)```", readme, flags=re.S)
+    assert "pip install -e ." in blocks[0] and "rc3r paper" in blocks[0], blocks[0]
+    assert "pip install" in blocks[1] and "pytest" in blocks[1], blocks[1]
+    sections = _sections(readme)
+    assert blocks[0] in sections[0][1] and blocks[1] in sections[0][1]
+    heading, body = sections[1]
+    assert heading.lower().startswith("the path"), heading
+    places = [body.find(f"`{cmd}") for cmd in PATH]
+    assert -1 not in places and places == sorted(places), dict(zip(PATH, places))
+    assert sections[2][0].lower().startswith("reference"), sections[2][0]
+    rows = [ln.split("`")[1].split()[1] for ln in sections[2][1].splitlines() if ln.startswith("| `rc3r")]
+    assert rows[:len(PATH) - 2] == ["paper", "verify-model", "excite", "identify", "bounds"], rows
+    in_path = [r for r in rows if f"rc3r {r}" in PATH]
+    assert in_path == [c.split()[1] for c in PATH], in_path
+
+
+def test_where_next_and_the_index_lead_to_the_pages_of_your_arm():
+    """docs/first-10-minutes.md "Where next" links generic, identification, design and export before any
+    page of the method; docs/index.md's table of contents puts them right after the first two pages."""
+    first = dict(_sections((DOCS / "first-10-minutes.md").read_text()))
+    where = next(body for heading, body in first.items() if "Where next" in heading)
+    links = re.findall(r"\]\(([\w-]+)\.md\)", where)
+    mine = ["generic", "identification", "design", "export"]
+    assert all(page in links for page in mine), links
+    assert max(links.index(p) for p in mine) < links.index("conventions"), links
+    index = (DOCS / "index.md").read_text()
+    entries = [ln.strip() for ln in re.search(r"```\{toctree\}\n(.*?)```", index, flags=re.S).group(1).splitlines()
+               if ln.strip() and not ln.strip().startswith(":")]
+    assert entries[:6] == ["first-10-minutes", "notebooks/quickstart", *mine], entries
+
+
+# ---- console transcripts checked against the real output (issue 33 item 4) ------------------------
+
+#: A console block whose output is checked: the comment ``<!-- transcript: SCRIPT ... -->`` right before
+#: its fence. SCRIPT runs exactly the block's ``$ rc3r ...`` commands, in the page's order.
+TRANSCRIPT = re.compile(r"<!-- transcript: (\S+)[^>]*-->\n```console\n(.*?)```", flags=re.S)
+
+#: What depends on the machine's load, masked on both sides: wall times, runs per minute.
+TIMING = (re.compile(r"wall [\d.]+ s"), re.compile(r"[\d.]+ s \([\d.]+ runs/min\)"))
+
+
+def transcripts() -> dict:
+    """SCRIPT -> [(page, command, expected stdout lines)] of every marked block, in page order."""
+    out: dict = {}
+    for page in sorted(DOCS.glob("*.md")):
+        for script, body in TRANSCRIPT.findall(page.read_text()):
+            for chunk in re.split(r"^\$ ", body, flags=re.M)[1:]:
+                command, *lines = chunk.rstrip("\n").split("\n")
+                out.setdefault(script, []).append((page.name, command, lines))
+    return out
+
+
+def script_commands(script: str) -> list[str]:
+    """The rc3r command lines of an example script (``$RC3R`` read as ``rc3r``)."""
+    text = (DOCS.parent / script).read_text()
+    return ["rc3r " + ln.split(None, 1)[1] for ln in text.splitlines() if ln.startswith("$RC3R ")]
+
+
+def _mask(line: str, cwd) -> str:
+    line = line.replace(f"{cwd}/", "")
+    for rx in TIMING:
+        line = rx.sub(lambda m: re.sub(r"[\d.]+", "#", m.group(0)), line)
+    return line
+
+
+def run_commands(commands, cwd) -> list[list[str]]:
+    """Each command's stdout lines (run in-process in ``cwd``, working directory prefix removed)."""
+    import contextlib
+    import io
+    import os
+    import shlex
+
+    from rc3r.cli import main
+
+    old, outputs = os.getcwd(), []
+    os.chdir(cwd)
+    try:
+        for command in commands:
+            with contextlib.redirect_stdout(io.StringIO()) as buf:
+                code = main(shlex.split(command)[1:])
+            text = buf.getvalue()
+            assert code == 0, (command, code, text)
+            outputs.append([ln.replace(f"{cwd}/", "") for ln in text.rstrip("\n").split("\n")])
+    finally:
+        os.chdir(old)
+    return outputs
+
+
+@pytest.mark.slow
+def test_every_console_transcript_marked_as_checked_is_what_its_commands_print(tmp_path):
+    """The marked console blocks of docs/*.md (docs/identification.md's worked example) hold exactly the
+    commands of their example script, in its order, and each command's stdout line for line (wall times
+    and runs per minute masked; progress lines go to stderr and are not in the transcripts). Rewrite them
+    after a change of output with ``python tests/test_docs.py --update``."""
+    found = transcripts()
+    assert "examples/identified_design.sh" in found, "docs/identification.md lost its checked transcript"
+    for script, blocks in found.items():
+        assert [cmd for _, cmd, _ in blocks] == script_commands(script), script
+        work = tmp_path / Path(script).stem
+        work.mkdir()
+        got = run_commands([cmd for _, cmd, _ in blocks], work)
+        for (page, cmd, want), lines in zip(blocks, got):
+            assert [_mask(ln, work) for ln in lines] == [_mask(ln, work) for ln in want], f"{page}: $ {cmd}"
+
+
+def _update() -> None:
+    """Rewrite every marked transcript with its commands' real output (run in a temporary directory)."""
+    import tempfile
+
+    for script, blocks in transcripts().items():
+        with tempfile.TemporaryDirectory() as tmp:
+            got = run_commands([cmd for _, cmd, _ in blocks], Path(tmp).resolve())
+        outputs = {cmd: lines for (_, cmd, _), lines in zip(blocks, got)}
+
+        def body(match):
+            cmds = [c.split("\n", 1)[0] for c in re.split(r"^\$ ", match.group(2), flags=re.M)[1:]]
+            new = "".join(f"$ {c}\n" + "".join(f"{ln}\n" for ln in outputs[c]) for c in cmds)
+            return match.group(0).replace(match.group(2), new)
+
+        for page in sorted({p for p, _, _ in blocks}):
+            path = DOCS / page
+            path.write_text(TRANSCRIPT.sub(lambda m: body(m) if m.group(1) == script else m.group(0),
+                                           path.read_text()))
+            print(f"updated {path}")
+
+
+if __name__ == "__main__":
+    import sys
+
+    if sys.argv[1:] != ["--update"]:
+        sys.exit("usage: python tests/test_docs.py --update  (rewrite the checked console transcripts)")
+    _update()

@@ -207,7 +207,7 @@ spec = rc3r.build_run(robot=sys.argv[1], controller="fbl", duration=0.002, rate=
 t0 = time.perf_counter()
 res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
 sim = _fast.simulator(spec.plant).instance
-print("FILE", sim.__file__, os.stat(sim.__file__).st_mtime_ns, res.status, res.engine,
+print("FILE", sim.__file__, os.stat(sim.__file__).st_mtime_ns, res.outcome, res.engine,
       "%.1f" % (time.perf_counter() - t0))
 """
 
@@ -227,7 +227,7 @@ def test_instantiation_is_written_once_and_cached(tmp_path):
         return [ln for ln in out.stdout.splitlines() if ln.startswith("FILE")][0].split()
 
     first, second = probe(), probe()
-    assert first[1].startswith(str(tmp_path / "rc3r_engines")) and first[3:5] == ["ok", "fast"]
+    assert first[1].startswith(str(tmp_path / "rc3r_engines")) and first[3:5] == ["finished", "fast"]
     assert first[1:3] == second[1:3]
     assert float(second[5]) < float(first[5])
 
@@ -346,7 +346,7 @@ def test_stiff_period_work_budget_stops_the_run_with_its_cause(tmp_path):
                           engine="fast")
     opt = replace(spec.options, period_rtol=1e-14, period_atol=1e-16, max_steps=1.0)
     res = simulate(spec.true_plant, spec.law, spec.trajectory, opt, x0=[0.1, 5.0])
-    assert res.status == "diverged" and len(res.t) >= 1
+    assert res.outcome == "diverged" and len(res.t) >= 1
     assert "a ROS4 period of the plant needed more than 100 steps" in res.message
     assert "max_steps" in res.message and 'sampled_method = "rk4"' in res.message and "\n" not in res.message
 

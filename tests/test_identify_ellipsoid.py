@@ -133,7 +133,7 @@ def test_closed_loop_stays_under_the_ultimate_bound(arm):
     assert covers(law, arm.theta) and Delta @ P @ Delta == pytest.approx(0.64)
     traj = arm.default_trajectory()
     res = rc3r.simulate(arm, law, traj, rc3r.SimOptions(duration=1.0, engine="python"))
-    assert res.status == "ok", res.message
+    assert res.outcome == "finished", res.message
     m_lo, m_hi = guarantee.inertia_range(arm, res.q)
     bound = error_bound(law, m_lo, m_hi, arm.n)
     ball = make_law("robust", th0, rho=law.rho_P * 1.5, eps=0.5)

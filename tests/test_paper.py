@@ -139,3 +139,21 @@ def test_sweep_eps_writes_plot(tmp_path, capsys):
     data = json.loads((out / "sweep.json").read_text())
     assert len(data["summary"]) == 4 and (out / "pareto.png").exists()
     assert {(s["rate_hz"], s["eps"]) for s in data["summary"]} == {(None, 0.1), (None, 0.5), (1e5, 0.1), (1e5, 0.5)}
+
+
+def test_paper_table_says_the_verdict_not_ok():
+    """Issue 33 item 6: the row of a sampled run that chatters says ``chattering (joints ...)`` in rc3r paper's
+    table (column ``verdict``), never ``ok``; the numbers of the row are the metrics' own."""
+    import re
+
+    from rc3r.cli.run import _table
+    from rc3r.study import build_run, execute
+
+    spec = build_run(controller="robust", perturbed=True, eps=0.5, rate=10000.0, duration=0.3, engine="python")
+    _, m = execute(spec)
+    assert m["verdict"] == "chattering" and m["status"] == "ok"
+    head, _, row = _table([m]).splitlines()
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert head.split("|")[3].strip() == "verdict"
+    assert re.fullmatch(r"chattering \(joints [\d, ]+\)", cells[2]), cells[2]
+    assert cells[3] == " ".join(f"{v:.3g}" for v in m["max_abs_error"])

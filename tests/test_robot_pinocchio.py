@@ -400,3 +400,40 @@ def test_default_trajectory_keeps_half_the_urdf_velocity_limit(ur5):
         traj = arm.default_trajectory()
         peak = np.abs(np.array([np.asarray(traj.evaluate(s)[1]).ravel() for s in t])).max(axis=0)
         np.testing.assert_allclose(peak, expect, rtol=1e-6)
+
+
+def test_a_joint_named_like_a_link_can_be_locked(tmp_path):
+    """Issue 33 item 1. The SO-100 of example-robot-data has a link and a joint both named
+    ``gripper``; locking that joint (Pinocchio's buildReducedModel looks frames up by name) gives
+    the same arm as the same URDF with the joint renamed and locked: equal standard parameters,
+    joint names and frame names (the link keeps its URDF name, no renaming left behind)."""
+    text = (example_robot_data_dir() / "so_arm_description/urdf/so100.urdf").read_text()
+    renamed = tmp_path / "renamed.urdf"
+    renamed.write_text(text.replace('<joint name="gripper"', '<joint name="gripper_joint"'))
+    assert renamed.read_text() != text
+    robot = PinocchioRobot.from_urdf(example_robot_data_dir() / "so_arm_description/urdf/so100.urdf",
+                                     lock={"gripper": 0.3})
+    ref = PinocchioRobot.from_urdf(renamed, lock={"gripper_joint": 0.3})
+    assert robot.n == ref.n == 5 and robot.joint_names == ref.joint_names
+    np.testing.assert_array_equal(robot.standard_parameters(), ref.standard_parameters())
+    names = [f.name for f in robot.model.frames]
+    assert names == [f.name if f.name != "gripper_joint" else "gripper" for f in ref.model.frames]
+    assert names.count("gripper") == 2
+
+
+def test_unlocked_mimic_joints_are_refused_with_the_options_that_lock_them(tmp_path):
+    """Issue 33 item 2: every unlocked <mimic> joint is named in one line with the command-line
+    options that lock it (``--lock J=0``, not Python syntax), and those options are enough."""
+    panda = example_robot_data_dir() / "panda_description/urdf/panda.urdf"
+    text = panda.read_text().replace('<joint name="panda_finger_joint1" type="prismatic">',
+                                     '<joint name="panda_finger_joint1" type="prismatic">'
+                                     '<mimic joint="panda_joint7" multiplier="0.0"/>')
+    two = tmp_path / "two_mimics.urdf"
+    two.write_text(text)
+    with pytest.raises(UrdfError) as info:
+        PinocchioRobot.from_urdf(two)
+    msg = str(info.value)
+    assert "\n" not in msg and "lock=" not in msg
+    assert msg.endswith("lock them with --lock panda_finger_joint1=0 --lock panda_finger_joint2=0"), msg
+    with pytest.raises(UrdfError, match=r"mimics 'panda_finger_joint1': lock it with --lock panda_finger_joint2=0$"):
+        PinocchioRobot.from_urdf(panda)

@@ -29,7 +29,7 @@ def test_tiny_eps_stops_on_the_work_budget_and_names_eps(perturbed):
     t0 = time.perf_counter()
     res = simulate(perturbed.plant, law, perturbed.trajectory, opt)
     assert time.perf_counter() - t0 < 120  # generous: the point is 'not hours'; 2e4 steps take ~0.1 s
-    assert res.status == "diverged" and res.engine == "fast"
+    assert res.outcome == "diverged" and res.engine == "fast"
     assert "eps = 1e-06" in res.message and "max_steps" in res.message
     assert res.t_end < 0.5  # the first chunk's budget (2e4 x 0.5 s = 1e4 steps) is spent early
     assert res.steps + res.rejected_steps <= 1e4 + 1  # one chunk, one attempt past the budget at most
@@ -47,7 +47,7 @@ def test_python_engine_budget(perturbed):
     law = Robust(perturbed.law.theta, rho=perturbed.law.rho, eps=1e-6)
     res = simulate(perturbed.plant, law, perturbed.trajectory, SimOptions(duration=1.0, max_steps=50.0,
                                                                             engine="python"))
-    assert res.status == "diverged" and "eps = 1e-06" in res.message
+    assert res.outcome == "diverged" and "eps = 1e-06" in res.message
     assert res.rhs_evals <= 10 * 50 * 1.0 + 1000 + 1
 
 
@@ -76,7 +76,7 @@ def test_nan_torque_is_a_divergence_not_an_exception(perturbed, engine, rate):
     law = _NaNAfter(perturbed.law.theta)
     res = simulate(perturbed.plant, law, perturbed.trajectory, SimOptions(duration=0.5, rate=rate,
                                                                             engine=engine))
-    assert res.status == "diverged" and "NaN" in res.message
+    assert res.outcome == "diverged" and "NaN" in res.message
     assert 0.19 < res.t_end < 0.21
     assert res.t.size > 100 and np.all(np.isfinite(res.q))
 
@@ -95,7 +95,7 @@ def test_run_stops_at_the_first_sample_past_its_bound(perturbed, which):
     bounds = {"q": dict(q_max=1.5), "qd": dict(qd_max=1.5)}[which]
     res = simulate(perturbed.plant, law, traj, SimOptions(duration=2.0, rate=1000.0, **bounds))
     unit = {"q": "rad", "qd": "rad/s"}[which]
-    assert res.status == "diverged" and f"|{which}| exceeded its bound (1.5 {unit})" in res.message
+    assert res.outcome == "diverged" and f"|{which}| exceeded its bound (1.5 {unit})" in res.message
     x = res.q if which == "q" else res.qd
     peak = np.max(np.abs(x), axis=1)
     assert peak[-1] > 1.5 >= peak[-2]
@@ -115,7 +115,7 @@ def test_step_underflow_exit_fires_at_its_threshold(perturbed):
     from rc3r.plants import as_plant
 
     res = _fast.run(as_plant(perturbed.plant), law, perturbed.trajectory, opt, x0)
-    assert res.status == "diverged" and S.STATUS_TEXT[S.HMIN] in res.message
+    assert res.outcome == "diverged" and S.STATUS_TEXT[S.HMIN] in res.message
     assert res.t_end == 0.0 and res.steps == 0
     assert res.rejected_steps == 10
 

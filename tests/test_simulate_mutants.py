@@ -222,7 +222,7 @@ def test_divergence_messages_name_the_bound(spec):
     from rc3r.simulate import _message
 
     opt = SimOptions(q_max=2.5, qd_max=30.0, u_max=400.0, max_steps=5e3)
-    assert _message(S.OK, 1.0, opt) == "ok"
+    assert _message(S.OK, 1.0, opt) == "finished at t = 1 s"
     assert _message(S.QBOUND, 0.1234567, opt) == "diverged at t = 0.123457 s: |q| exceeded its bound (2.5 rad)"
     assert _message(S.QDBOUND, 1.0, opt) == "diverged at t = 1 s: |qd| exceeded its bound (30 rad/s)"
     assert _message(S.UBOUND, 2.0, opt) == "diverged at t = 2 s: |u| exceeded its bound (400 N m)"
@@ -254,7 +254,7 @@ def test_a_run_starts_on_the_trajectory_or_at_the_given_state(spec):
     for bad in (np.zeros(5), np.r_[np.zeros(5), np.nan]):
         with pytest.raises(ParameterError, match="initial state must be 6 finite numbers"):
             simulate(spec.plant, law, spec.trajectory, opt, x0=bad)
-    assert math.isclose(res.t_end, 0.002) and res.status == "ok" and res.message == "ok"
+    assert math.isclose(res.t_end, 0.002) and res.outcome == "finished" and res.message == "finished at t = 0.002 s"
 
 
 def test_stored_desired_positions_are_the_trajectorys(spec):
@@ -338,7 +338,7 @@ def test_continuous_python_run_stops_where_the_bound_is_crossed(spec, which):
     bounds = {"q": dict(q_max=1.5), "qd": dict(qd_max=1.5)}[which]
     res = simulate(spec.plant, law, traj, SimOptions(duration=1.0, engine="python", **bounds))
     unit = {"q": "rad", "qd": "rad/s"}[which]
-    assert res.status == "diverged" and f"|{which}| exceeded its bound (1.5 {unit})" in res.message
+    assert res.outcome == "diverged" and f"|{which}| exceeded its bound (1.5 {unit})" in res.message
     assert res.t_end == pytest.approx(np.arcsin(0.75), abs=1e-6)
     x = res.q if which == "q" else res.qd
     assert np.max(np.abs(x)) <= 1.5 and res.t[-1] <= res.t_end < res.t[-1] + 1e-3
@@ -363,6 +363,6 @@ def test_python_budget_scales_with_the_duration(spec, duration):
 
     law = Robust(spec.law.theta, rho=spec.law.rho, eps=1e-6)
     res = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=duration, max_steps=50.0, engine="python"))
-    assert res.status == "diverged" and "more than 50 steps per simulated second" in res.message
+    assert res.outcome == "diverged" and "more than 50 steps per simulated second" in res.message
     assert res.rhs_evals == int(10 * 50 * duration) + 1000
     assert res.t_end < duration

@@ -12,12 +12,12 @@ import rc3r
 from rc3r.simulate import verdict as V
 
 
-def _res(u, rate=1000.0, status="ok", e=None):
+def _res(u, rate=1000.0, outcome="finished", e=None):
     """A stand-in SimResult: stored torque u (N, n) at `rate`, total variation over every sample."""
     u = np.asarray(u, dtype=float)
     t = np.arange(u.shape[0]) / rate
     q = np.zeros_like(u) if e is None else np.asarray(e, dtype=float)
-    return SimpleNamespace(u=u, t=t, t_end=float(t[-1]), mode="sampled", status=status,
+    return SimpleNamespace(u=u, t=t, t_end=float(t[-1]), mode="sampled", outcome=outcome,
                            tv_exact=np.abs(np.diff(u, axis=0)).sum(axis=0), e=q)
 
 
@@ -49,7 +49,7 @@ def test_order_and_tolerance():
     """diverged beats everything; limit-violated beats saturated; tolerance_met reads max|e|."""
     u = np.full((10, 1), 1.0)
     e = np.full((10, 1), 0.02)
-    assert V.verdict(_res(u, status="diverged"), saturation=[1.0])["verdict"] == "diverged"
+    assert V.verdict(_res(u, outcome="diverged"), saturation=[1.0])["verdict"] == "diverged"
     out = V.verdict(_res(u, e=e), saturation=[1.0], limits={"violated": True})
     assert out["verdict"] == "limit-violated" and out["tolerance_met"] is False
     assert V.verdict(_res(u, e=e), tolerance=0.05)["tolerance_met"] is True

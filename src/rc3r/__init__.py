@@ -31,6 +31,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
 ``rc3r.robots.pinocchio_supply``       a chain's kernel supply of the compiled engine (Y^T r, Y theta in O(n))
+``rc3r.robots.urdf_names``            URDF files by name: example-robot-data's directory, ``erd:`` names, --lock advice
 ``rc3r.robots.generated``              generated C kernels of any arm (CasADi SX -> C, cached on disk)
 ``rc3r.robots.generated_chain``        what is generated (``FUNCTIONS``) and from what (a chain's constants)
 ``rc3r.robots.generated_sym``          their symbolic recursions and the C batch wrapper
@@ -111,7 +112,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.verify``                        checks of a robot against Pinocchio
 ``rc3r.plotting``                      figures (never switches the matplotlib backend)
 ``rc3r.animation``                     the arm tracking its trajectory in 3D (Pinocchio FK), as a GIF
-``rc3r.io``                            atomic file output (user's umask), TOML reading
+``rc3r.io``                            atomic file output (user's umask), TOML reading, a config's file names
 ``rc3r.provenance``                    versions, git commit, command line of an output
 ``rc3r.errors``                        exception types (one-line errors on the command line)
 ``rc3r.conventions``                   orders every layer shares (Pinocchio's standard parameters, ``STD_KEYS``)

@@ -63,8 +63,8 @@ def end_effector_frame(model) -> int:
     the last joint's own frame if none is farther."""
     import pinocchio as pin
 
-    last = model.njoints - 1
-    best, key = model.getFrameId(model.names[last]), (0.0, False)
+    last = model.njoints - 1  # the joint's own frame: a link may carry the joint's name (the SO-100's gripper)
+    best, key = model.getFrameId(model.names[last], pin.FrameType.JOINT), (0.0, False)
     kinds = (pin.FrameType.BODY, pin.FrameType.FIXED_JOINT, pin.FrameType.OP_FRAME)
     for fid, f in enumerate(model.frames):
         if f.parentJoint == last and f.type in kinds:

@@ -32,7 +32,8 @@ except ModuleNotFoundError:  # Python 3.10: the same parser, as the package toml
 
 __all__ = ["atomic_path", "atomic_write_text", "atomic_write_json", "atomic_savefig", "read_toml", "tomllib",
            "apply_umask", "floats", "strict_json", "file_target_problem", "native_stderr", "NativeStderr",
-           "MAX_MAGNITUDE", "MAGNITUDE_NOTE", "too_large", "number_problem", "require_file"]
+           "MAX_MAGNITUDE", "MAGNITUDE_NOTE", "too_large", "number_problem", "require_file", "PATH_KEYS",
+           "read_config", "resolve_config_paths", "portable_config"]
 
 #: Largest magnitude of a number read from a URDF (origins, axes, masses, inertias), a parameter
 #: file or a box file, in SI units. Beyond it products and squares of the dynamics (up to the 4th
@@ -291,3 +292,101 @@ def native_stderr():
     finally:
         os.close(saved)
         sink.close()
+
+
+#: The keys of a run configuration that name files, as ``(table, key)`` (``""``: the top level); the
+#: plant's ``spec`` only when it names a URDF (ends in ``.urdf``).
+PATH_KEYS = (("", "urdf"), ("", "box"), ("", "bounds"), ("plant", "urdf"), ("plant", "box"), ("plant", "spec"))
+
+
+def _path_entries(cfg: dict):
+    """``(table dict, key, value)`` of every file the configuration ``cfg`` names (:data:`PATH_KEYS`)."""
+    for table, key in PATH_KEYS:
+        where = cfg if table == "" else cfg.get(table)
+        value = where.get(key) if isinstance(where, dict) else None
+        if isinstance(value, str) and value and (key != "spec" or value.endswith(".urdf")):
+            yield where, key, value
+
+
+def resolve_config_paths(cfg: dict, base) -> dict:
+    """The files a run configuration names, read relative to the configuration file.
+
+    Parameters
+    ----------
+    cfg : dict
+        A run configuration (the TOML's tables).
+    base : path-like
+        The directory of the configuration file.
+
+    Returns
+    -------
+    dict
+        A copy of ``cfg`` whose relative file names (:data:`PATH_KEYS`) are ``base / name``, unless
+        only ``name`` exists from the working directory (configurations written before names were
+        relative to their file). Absolute names and ``erd:`` names
+        (:data:`rc3r.robots.urdf_names.ERD_PREFIX`, resolved where the URDF is read) are kept.
+    """
+    import copy
+
+    from .robots.urdf_names import ERD_PREFIX
+
+    out = copy.deepcopy(cfg)
+    for where, key, value in _path_entries(out):
+        if value.startswith(ERD_PREFIX) or Path(value).is_absolute():
+            continue
+        beside = Path(os.path.abspath(Path(base) / value))  # "../arm.urdf" without the ".."
+        if beside.exists() or not Path(value).exists():
+            where[key] = str(beside)
+    return out
+
+
+def portable_config(cfg: dict, base) -> dict:
+    """The files a run configuration names, written portably for a configuration file in ``base``.
+
+    Parameters
+    ----------
+    cfg : dict
+        A run configuration whose file names are absolute or relative to the working directory.
+    base : path-like
+        The directory the configuration file is written to.
+
+    Returns
+    -------
+    dict
+        A copy of ``cfg`` naming a URDF of example-robot-data ``erd:REL``
+        (:func:`rc3r.robots.urdf_names.erd_name`) and any other file relative to ``base``
+        (``os.path.relpath``); :func:`resolve_config_paths` reads them back.
+    """
+    import copy
+
+    from .robots.urdf_names import ERD_PREFIX, erd_name
+
+    out = copy.deepcopy(cfg)
+    base = Path(base).resolve()
+    for where, key, value in _path_entries(out):
+        if value.startswith(ERD_PREFIX):
+            continue
+        name = erd_name(value) if key in ("urdf", "spec") else None
+        where[key] = name or Path(os.path.relpath(Path(value).resolve(), base)).as_posix()
+    return out
+
+
+def read_config(path) -> dict:
+    """Read a run configuration TOML (``--config``).
+
+    Parameters
+    ----------
+    path : path-like
+        The TOML file.
+
+    Returns
+    -------
+    dict
+        Its tables, file names resolved relative to the file (:func:`resolve_config_paths`).
+
+    Raises
+    ------
+    rc3r.errors.ConfigError
+        A missing, unreadable or malformed file (:func:`read_toml`).
+    """
+    return resolve_config_paths(read_toml(path, "config file"), Path(path).parent)

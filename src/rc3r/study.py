@@ -584,7 +584,9 @@ def _urdf_robot_cached(urdf, lock: dict | None = None):
     import os
 
     from .robots import load_urdf_robot
+    from .robots.urdf_names import resolve_erd
 
+    urdf = resolve_erd(urdf)  # erd:REL -> the file of example-robot-data
     try:
         st = os.stat(urdf)
         key = ("urdf", os.path.realpath(urdf), st.st_mtime_ns, st.st_size, tuple(sorted((lock or {}).items())))

@@ -117,11 +117,12 @@ def run_job(job: Job) -> tuple[dict, dict]:
     bad input raises :class:`rc3r.errors.Rc3rError` as ``rc3r run`` would; an
     interrupted run raises ``KeyboardInterrupt`` (never a row: a resumed campaign runs it).
     """
+    from ..simulate import file_status
     from ..study import execute
 
     spec = job.build()
     res, m = execute(spec)
-    if res.status == "interrupted":
+    if res.outcome == "interrupted":
         raise KeyboardInterrupt(res.message)
     e_max = np.asarray(m["max_abs_error"])
     covered, bound = _bound(spec, res)
@@ -133,7 +134,7 @@ def run_job(job: Job) -> tuple[dict, dict]:
         "controller": job.controller, "eps": eps,
         "rate_hz": None if spec.options.rate is None else float(spec.options.rate),  # as simulated
         "theta_dist": float(np.linalg.norm(spec.plant.theta - th0)), "rho": spec.model.get("rho"),
-        "covered": covered, "status": res.status, "t_end": res.t_end,
+        "covered": covered, "status": file_status(res), "t_end": res.t_end,
         "max_error": float(e_max.max()), "final_error": float(np.max(m["final_error_bound"])),
         "rms_error": float(np.max(m["rms_error"])), "max_torque": float(np.max(m["max_abs_torque"])),
         "chattering": float(np.sum(m["chattering"])),

@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from ..errors import ConfigError
+from ..simulate.verdict import VERDICTS
 from .jobs import Job, plant_seed
 
 __all__ = ["montecarlo_jobs", "montecarlo_summary", "eps_jobs", "eps_summary", "rate_jobs", "rate_map",

@@ -91,6 +91,13 @@ def _lock(text):
     return name, v
 
 
+def urdf_path(text):
+    """``--urdf``: a path, or ``erd:REL`` for a file of example-robot-data (its path, resolved here)."""
+    from ..robots.urdf_names import resolve_erd
+
+    return str(resolve_erd(text))
+
+
 def _urdf_or_number(text):
     if text == "urdf":
         return text
@@ -125,8 +132,9 @@ def _noise(text):
 def plant_args(p, robot_help: bool = True) -> None:
     """The arm and plant options of run, montecarlo and sweep (docs/control.md, "Plants")."""
     if robot_help:
-        p.add_argument("--urdf", help="the arm from a URDF (any serial arm through Pinocchio; with --robot rr3 the "
-                                      "3R's closed form)")
+        p.add_argument("--urdf", type=urdf_path,
+                       help="the arm from a URDF (any serial arm through Pinocchio; with --robot rr3 the "
+                            "3R's closed form)")
         p.add_argument("--lock", type=_lock, action="append", metavar="JOINT=VALUE",
                        help="fix a joint of the URDF at VALUE (repeatable; fingers, mimic joints)")
     p.add_argument("--torque-limit", type=_urdf_or_number, metavar="urdf|NM",
@@ -184,9 +192,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     v = sub.add_parser("verify-model", help="cross-check a robot's model and regressor against Pinocchio")
     v.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default rr3, the paper's arm)")
-    v.add_argument("--urdf", help="a URDF: of the paper's 3R structure (closed form), or with --robot any, or "
-                                  "with --generic any serial arm through Pinocchio")
+    v.add_argument("--urdf", type=urdf_path,
+                   help="a URDF: of the paper's 3R structure (closed form), or with --robot any, or "
+                        "with --generic any serial arm through Pinocchio")
     v.add_argument("--generic", action="store_true", help="check --urdf as a generic Pinocchio arm")
+    v.add_argument("--lock", type=_lock, action="append", metavar="JOINT=VALUE",
+                   help="fix a joint of the URDF at VALUE (repeatable; fingers, mimic joints; implies --generic)")
     v.add_argument("--samples", type=_positive(int), default=1000, help="random states (default 1000)")
     v.add_argument("--seed", type=_positive(int, allow_zero=True), default=0, help="RNG seed (default 0)")
     v.add_argument("--json", action="store_true", help="one JSON object on stdout")
@@ -197,7 +208,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("bounds", help="theta_0 and rho from an uncertainty box")
     b.add_argument("--box", help="box TOML (default: the paper's box)")
-    b.add_argument("--urdf", help="nominal robot URDF (default: urdf/rr3.urdf; any serial arm through Pinocchio)")
+    b.add_argument("--urdf", type=urdf_path,
+                   help="nominal robot URDF (default: urdf/rr3.urdf; any serial arm through Pinocchio)")
     b.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}) instead of --urdf")
     b.add_argument("--lock", type=_lock, action="append", metavar="JOINT=VALUE",
                    help="fix a joint of the URDF at VALUE (repeatable)")
@@ -270,7 +282,7 @@ def build_parser() -> argparse.ArgumentParser:
     be = sub.add_parser("bench", help="closed form vs Pinocchio and simulation timings")
     be.add_argument("--json", action="store_true", help="one JSON object on stdout")
     be.add_argument("--quick", action="store_true", help="tiny sizes (CI: correctness only)")
-    importlib.import_module(".identify", __package__).add_parsers(sub, _positive, _lock)  # identify, excite
+    importlib.import_module(".identify", __package__).add_parsers(sub, _positive, _lock, urdf_path)  # identify, excite
     importlib.import_module(".export", __package__).add_parser(sub)  # export
     importlib.import_module(".design", __package__).add_parser(sub)  # design
     return p

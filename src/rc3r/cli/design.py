@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from ..errors import ConfigError
-from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
+from ..io import atomic_savefig, atomic_write_json, atomic_write_text
 from ..provenance import provenance
 from . import EXIT
 from ._output import check_output_path, output_dir
@@ -116,6 +116,7 @@ def cmd_design(args) -> int:
     from ..design.report import design_figure, design_markdown, design_toml, failure_line, next_steps
     from ..design.verify import design_config, verify_design
     from ..campaign.runner import prepare
+    from ..io import read_config
     from ..study import build_run
     from .run import announce_compile, plant_options
 
@@ -123,7 +124,7 @@ def cmd_design(args) -> int:
         raise ConfigError("give --workers or --scheduler, not both")
     if args.payload_com is not None and args.payload is None:
         raise ConfigError("--payload-com needs --payload LO:HI")
-    cfg = {} if args.config is None else read_toml(args.config, "config file")
+    cfg = {} if args.config is None else read_config(args.config)
     opts = plant_options(args)
     cfg = design_config(cfg, robot=args.robot, urdf=opts["urdf"], lock=opts["lock"], payload=args.payload,
                         payload_com=args.payload_com, box=args.box, bounds=args.bounds, friction=opts["friction"],
@@ -160,7 +161,8 @@ def cmd_design(args) -> int:
         wall = time.perf_counter() - t0
         info = res.describe()
         info.update({"wall_s": wall, "command": command, "provenance": provenance(config=cfg, seed=args.seed)})
-        atomic_write_text(tmp / "design.toml", design_toml(res, f"made by: {command}" if command else ""))
+        atomic_write_text(tmp / "design.toml", design_toml(res, f"made by: {command}" if command else "",
+                                                           base=out.resolve()))
         atomic_write_text(tmp / "design.md", design_markdown(res, command))
         atomic_write_json(tmp / "design.json", info)
         atomic_savefig(design_figure(res), tmp / "design.png", dpi=110)

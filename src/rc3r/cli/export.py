@@ -17,13 +17,13 @@ def cmd_export(args) -> int:
     from ..errors import ConfigError
     from ..export.c import check_exportable, regressor_source
     from ..export.harness import FILES, write_export
-    from ..io import read_toml
     from ..provenance import provenance
+    from ..io import read_config
     from ..study import build_run
     from ._output import check_output_path, output_dir
     from .run import plant_options
 
-    cfg = read_toml(args.config, "config file")
+    cfg = read_config(args.config)
     spec = build_run(robot=args.robot, controller=args.controller, rate=args.rate, eps=args.eps, config=cfg,
                      **plant_options(args))
     from ..study import design_unverified, design_warning

@@ -37,20 +37,21 @@ def _kinds(text):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def _arm_args(p, positive, lock) -> None:
+def _arm_args(p, positive, lock, urdf=str) -> None:
     g = p.add_mutually_exclusive_group(required=True)
     g.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)})")
-    g.add_argument("--urdf", help="the arm's URDF (any serial arm through Pinocchio)")
+    g.add_argument("--urdf", type=urdf, help="the arm's URDF (any serial arm through Pinocchio)")
     p.add_argument("--lock", type=lock, action="append", metavar="JOINT=VALUE",
                    help="fix a joint of the URDF at VALUE (repeatable)")
     p.add_argument("--seed", type=positive(int, allow_zero=True), default=0, help="RNG seed (default 0)")
 
 
-def add_parsers(sub, positive, lock) -> None:
-    """Add ``identify`` and ``excite`` to the subparsers ``sub`` (``positive``, ``lock``: the CLI's converters)."""
+def add_parsers(sub, positive, lock, urdf=str) -> None:
+    """Add ``identify`` and ``excite`` to the subparsers ``sub`` (``positive``, ``lock``, ``urdf``: the CLI's
+    converters)."""
     i = sub.add_parser("identify", help="coefficients, friction, covariance and bounds.toml from a log")
     i.add_argument("log", metavar="LOG", help="CSV (t, q1..qn, [qd1..qdn,] tau1..taun) or NPZ (t, q, [qd,] tau)")
-    _arm_args(i, positive, lock)
+    _arm_args(i, positive, lock, urdf)
     i.add_argument("--friction", type=_kinds, default=("viscous", "coulomb", "offset"), metavar="KINDS",
                    help="friction columns per joint: comma-separated viscous, coulomb, offset, or none "
                         "(default all three)")
@@ -76,7 +77,7 @@ def add_parsers(sub, positive, lock) -> None:
     i.add_argument("--force", action="store_true", help="replace an earlier result in --out")
 
     e = sub.add_parser("excite", help="an exciting trajectory (Fourier series, condition number minimised)")
-    _arm_args(e, positive, lock)
+    _arm_args(e, positive, lock, urdf)
     e.add_argument("--duration", type=positive(), required=True, metavar="T", help="period and length [s]")
     e.add_argument("--harmonics", type=positive(int), default=5, help="harmonics per joint (default 5)")
     e.add_argument("--max-velocity", type=positive(), metavar="RAD_S",

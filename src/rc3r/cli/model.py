@@ -112,10 +112,15 @@ def cmd_verify_model(args) -> int:
     if args.samples > MAX_SAMPLES:
         raise ConfigError(f"--samples {args.samples} is more than {MAX_SAMPLES} (the checks hold every state "
                           "in memory at once); give fewer")
-    if args.generic:
+    lock = dict(args.lock) if getattr(args, "lock", None) else None
+    if args.generic or (lock and not args.robot):  # locked joints: an arm read through Pinocchio
         if not args.urdf:
-            raise ConfigError("--generic needs --urdf PATH")
-        robot = load_urdf_robot(args.urdf)
+            raise ConfigError(f"{'--generic' if args.generic else '--lock'} needs --urdf PATH")
+        robot = load_urdf_robot(args.urdf, lock=lock)
+    elif lock:
+        from ..study import _nominal
+
+        robot = _nominal(args.robot, args.urdf, lock)
     elif args.robot:
         robot = load_robot(args.robot, urdf=args.urdf)
     else:

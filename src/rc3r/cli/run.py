@@ -10,7 +10,7 @@ from pathlib import Path
 
 
 from ..errors import ConfigError, DivergenceError
-from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
+from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_config
 from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate._fast import simulator
 from ..simulate.metrics import CHATTERING_DEFINITION
@@ -79,9 +79,7 @@ def _fmt3(x) -> str:
 def verdict_text(m: dict) -> str:
     """``clean, within 0.01 rad`` / ``chattering (joints 1, 3), tolerance 0.01 rad missed`` ...: the
     first words of a run's summary line."""
-    word = m.get("verdict", m.get("status"))
-    if word == "chattering" and m.get("chattering_joints"):
-        word += f" (joints {', '.join(str(j) for j in m['chattering_joints'])})"
+    word = verdict_word(m) if "verdict" in m else m.get("status")
     if word == "saturated" and m.get("saturation_fraction") is not None:
         word += f" ({100 * m['saturation_fraction']:.1f} % of samples at a torque limit)"
     met = m.get("tolerance_met")
@@ -149,7 +147,7 @@ def cmd_run(args) -> int:
     A diverged run writes its data up to the divergence, then raises
     :class:`~rc3r.errors.DivergenceError` (exit 3).
     """
-    cfg = {} if args.config is None else read_toml(args.config, "config file")
+    cfg = {} if args.config is None else read_config(args.config)
     spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
                      eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
                      payload=args.payload, payload_com=args.payload_com, config=cfg, **plant_options(args))
@@ -178,13 +176,13 @@ def cmd_run(args) -> int:
     with output_dir(out) as tmp:  # --out checked and locked before simulating
         res, m = execute(spec)
         estimate = _estimate(spec, res, m)
-        if fmt and res.status != "interrupted":
+        if fmt and res.outcome != "interrupted":
             anim_interrupted = not _animate(spec, res, m, tmp / f"animation.{fmt}", out)
         m["provenance"] = provenance(config=cfg, seed=spec.seed)
         res.save(tmp, m, spec.name)
         if estimate is not None:
             atomic_savefig(estimate, tmp / "estimate.png", dpi=110)
-    if res.status == "interrupted":
+    if res.outcome == "interrupted":
         print(f"rc3r: {spec.name} {res.message}: written to {out}/ (metrics.json status 'interrupted')",
               file=sys.stderr)
         return EXIT["interrupted"]
@@ -241,13 +239,22 @@ def _animate(spec, res, m: dict, path: Path, out: Path) -> bool:
     return True
 
 
+def verdict_word(m: dict) -> str:
+    """``clean``, ``chattering (joints 1, 2)``, ``saturated`` ...: a run's verdict (:mod:`rc3r.simulate.verdict`)
+    with the joints that chatter, as the summary tables print it."""
+    word = m["verdict"]
+    if word == "chattering" and m.get("chattering_joints"):
+        word += f" (joints {', '.join(str(j) for j in m['chattering_joints'])})"
+    return word
+
+
 def _table(rows: list[dict]) -> str:
-    head = ("| scenario | mode | status | max abs error [rad] | final error bound [rad] | "
+    head = ("| scenario | mode | verdict | max abs error [rad] | final error bound [rad] | "
             "max abs torque [N m] | chattering [N m/s] | wall [s] |")
     lines = [head, "|" + "---|" * 8]
     for m in rows:
         mode = m["mode"] if m["rate_hz"] is None else f"sampled {m['rate_hz'] / 1000:g} kHz"
-        lines.append(f"| {m['name']} | {mode} | {m['status']} | {_fmt3(m['max_abs_error'])} | "
+        lines.append(f"| {m['name']} | {mode} | {verdict_word(m)} | {_fmt3(m['max_abs_error'])} | "
                      f"{_fmt3(m['final_error_bound'])} | {_fmt3(m['max_abs_torque'])} | "
                      f"{_fmt3(m['chattering'])} | {m['wall_time_s']:.2f} |")
     return "\n".join(lines)
@@ -313,9 +320,9 @@ def _paper(paper, out: Path) -> int:
         for k, spec in enumerate(specs, 1):
             _progress(f"[{mode} {k}/{len(specs)}] {spec.name} ...")
             res, m = execute(spec)
-            if res.status == "interrupted":
+            if res.outcome == "interrupted":
                 raise KeyboardInterrupt
-            _progress(f"    {res.message}; max|e| = {_fmt3(m['max_abs_error'])} rad, wall {m['wall_time_s']:.2f} s")
+            _progress(f"    {verdict_word(m)}; max|e| = {_fmt3(m['max_abs_error'])} rad, wall {m['wall_time_s']:.2f} s")
             sub = out / mode / spec.name
             res.save(sub, m, spec.name)
             rows.append(m)

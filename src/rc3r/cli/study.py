@@ -24,7 +24,7 @@ from ..campaign.jobs import TIMING_KEYS
 from ..campaign.runner import DASK_GRACE_S
 from ..campaign.studies import gain_label
 from ..errors import ConfigError, WorkerLostError
-from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_toml
+from ..io import atomic_savefig, atomic_write_json, atomic_write_text
 from ..provenance import provenance
 from . import EXIT
 from ._output import check_output_path, locked
@@ -127,8 +127,10 @@ def _g(x) -> str:
 def _config(args) -> dict:
     """The campaign's configuration: --config, then the arm and plant options of the command line on top
     (every job gets them through its configuration: docs/control.md, "Plants")."""
-    cfg = {} if args.config is None else read_toml(args.config, "config file")
+    from ..io import read_config
     from .run import plant_options
+
+    cfg = {} if args.config is None else read_config(args.config)
 
     opts = plant_options(args)
     for key in ("urdf", "tolerance"):

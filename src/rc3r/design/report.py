@@ -13,12 +13,31 @@ import numpy as np
 __all__ = ["design_toml", "design_markdown", "design_figure", "predicted_bound"]
 
 
-def design_toml(result, header: str = "") -> str:
-    """The text of ``design.toml`` for a :class:`rc3r.design.verify.DesignResult`."""
-    from ..identify.bounds_file import to_toml
+def design_toml(result, header: str = "", base=None) -> str:
+    """The text of ``design.toml`` for a :class:`rc3r.design.verify.DesignResult`.
 
-    cfg = {k: v for k, v in result.config.items() if k not in ("gains", "simulation")}
-    sim = dict(result.config.get("simulation", {}))
+    Parameters
+    ----------
+    result : DesignResult
+        The design.
+    header : str
+        More comment lines for the top (the command that made it).
+    base : path-like, optional
+        The directory ``design.toml`` is written to: the files the design names are then written
+        portably (:func:`rc3r.io.portable_config`: a URDF of example-robot-data as
+        ``erd:REL``, any other file relative to ``base``); without it, as the config has them.
+
+    Returns
+    -------
+    str
+        The TOML text.
+    """
+    from ..identify.bounds_file import to_toml
+    from ..io import portable_config
+
+    config = result.config if base is None else portable_config(result.config, base)
+    cfg = {k: v for k, v in config.items() if k not in ("gains", "simulation")}
+    sim = dict(config.get("simulation", {}))
     sim["rate"] = float(result.rate)
     cfg["gains"] = result.gains()
     rec = result.recommendation()

@@ -74,9 +74,9 @@ def design_config(config: dict | None = None, **options) -> dict:
         raise ConfigError("give --robot NAME or --urdf PATH, not both")
     for key in ("robot", "urdf", "box", "bounds", "tolerance"):
         if options.get(key) is not None:
-            cfg[key] = options[key] if key in ("tolerance", "robot") else str(Path(options[key]).resolve())
-    for key in ("urdf", "box", "bounds"):  # design.toml names its files absolutely: it is run from anywhere
-        if isinstance(cfg.get(key), str) and Path(cfg[key]).exists():
+            cfg[key] = options[key] if key in ("tolerance", "robot") else str(options[key])
+    for key in ("urdf", "box", "bounds"):  # absolute while designing; design.toml names them portably
+        if isinstance(cfg.get(key), str) and not cfg[key].startswith("erd:") and Path(cfg[key]).exists():
             cfg[key] = str(Path(cfg[key]).resolve())
     if options.get("urdf") is not None:
         cfg.pop("robot", None)

@@ -332,11 +332,13 @@ def bench_ops(n: int, repeats: int) -> tuple[dict, dict, dict]:
 
 
 def _sim_row(spec, res, walls, execute_s) -> dict:
+    from ..simulate import file_status
+
     o = spec.options
     return {
         "wall_s": float(np.median(walls)), "min_wall_s": float(min(walls)), "repeats": len(walls),
         "execute_s": execute_s, "rhs_evals": int(res.rhs_evals), "steps": int(res.steps),
-        "rejected_steps": int(res.rejected_steps), "status": res.status, "message": res.message,
+        "rejected_steps": int(res.rejected_steps), "status": file_status(res), "message": res.message,
         "t_end": float(res.t_end), "duration_s": float(o.duration), "mode": o.mode,
         "rate_hz": o.rate, "engine": o.engine,
     }

@@ -29,6 +29,7 @@ GENERIC_TARGETS = {
 
 def bench_generic(quick: bool = False, progress=None) -> dict:
     """Measure the generic-robot targets; returns ``{"regressor": {...}, "runs": {...}, "targets": {...}}``."""
+    from ..simulate import file_status
     from ..study import build_run, execute
     from ..robots import load_robot
 
@@ -57,9 +58,10 @@ def bench_generic(quick: bool = False, progress=None) -> dict:
         res, m = execute(spec)
         steps = int(round(duration * 1000.0))
         rnea_s = out["regressor"][name]["rnea_us"] * 1e-6
+
         out["runs"][f"{name}-payload-{law}@1kHz"] = {
             "wall_s": res.wall_time_s, "execute_s": time.perf_counter() - t0, "duration_s": duration,
-            "engine": res.engine, "status": res.status, "max_abs_error": max(m["max_abs_error"]),
+            "engine": res.engine, "status": file_status(res), "max_abs_error": max(m["max_abs_error"]),
             "per_step_s": res.wall_time_s / steps, "rnea_per_step": res.wall_time_s / steps / rnea_s}
     scale = 10.0 / duration
     runs = out["runs"]

@@ -125,7 +125,7 @@ def plant_urdf_text(text: str, where: str, locked: dict | None = None) -> tuple[
         if joints[name].get("type") not in _ONE_DOF:
             raise UrdfError(f"{where}: cannot lock joint '{name}': it is not 1-DoF")
         _lock_joint(joints[name], float(value))
-    moving = []
+    moving, mimic = [], []
     for name, joint in joints.items():
         kind = joint.get("type")
         if kind == "fixed":
@@ -133,9 +133,12 @@ def plant_urdf_text(text: str, where: str, locked: dict | None = None) -> tuple[
         if kind not in _ONE_DOF:
             raise UrdfError(f"{where}: joint '{name}' of type {kind!r} is not 1-DoF (revolute, continuous, prismatic)")
         if joint.find("mimic") is not None:
-            raise UrdfError(f"{where}: joint '{name}' mimics '{joint.find('mimic').get('joint')}': lock it "
-                            f"(locked={{'{name}': 0.0}})")
+            mimic.append((name, joint.find("mimic").get("joint")))
         moving.append(name)
+    if mimic:
+        from ..robots.urdf_names import mimic_advice
+
+        raise UrdfError(mimic_advice(where, mimic))
     for inertial in root.iter("inertial"):
         _inertia_in_link_frame(inertial)
     for parent in list(root.iter()):

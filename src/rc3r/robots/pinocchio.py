@@ -45,7 +45,6 @@ by Pinocchio, locked joints by ``pinocchio.buildReducedModel``).
 from __future__ import annotations
 
 import math
-import sys
 import xml.etree.ElementTree as ET
 from functools import cached_property
 from pathlib import Path
@@ -55,10 +54,14 @@ import numpy as np
 from ..errors import ConfigError, ParameterError, UrdfError
 from ..io import MAGNITUDE_NOTE, native_stderr, number_problem, require_file
 from .base import Robot, stack_states
+from .urdf_names import ERD_PREFIX, erd_name, example_robot_data_dir, mimic_advice, resolve_erd
 from .base_parameters import (BaseParameters, base_parameters, check_model, physical_issues,
                               standard_parameter_names)
 
-__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir"]
+#: ``example_robot_data_dir``, ``ERD_PREFIX``, ``resolve_erd``, ``erd_name``, ``mimic_advice`` live in
+#: :mod:`rc3r.robots.urdf_names` (imported here, where they were first defined).
+__all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir", "ERD_PREFIX",
+           "resolve_erd", "erd_name"]
 
 #: Position limit [rad] given to ``continuous`` joints rebuilt as ``revolute``.
 CONTINUOUS_LIMIT = 1000.0
@@ -72,30 +75,6 @@ NAMED = {
     "ur5": ("ur_description/urdf/ur5_robot.urdf", {}),
     "panda": ("panda_description/urdf/panda.urdf", {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}),
 }
-
-
-def example_robot_data_dir() -> Path:
-    """The ``robots/`` directory of the installed example-robot-data (6.x: files only, no loader).
-
-    Looked for as ``[cmeel.prefix/]share/example-robot-data/robots`` under the
-    distribution's install location, ``sys.prefix`` and every ``sys.path`` entry.
-    """
-    import site
-
-    bases = []
-    try:
-        from importlib.metadata import distribution
-
-        bases.append(Path(distribution("example-robot-data").locate_file("")))
-    except Exception:  # not installed as a distribution: fall back to the prefixes
-        pass
-    bases += [Path(sys.prefix), *map(Path, site.getsitepackages()), *map(Path, filter(None, sys.path))]
-    for base in bases:
-        for sub in ("cmeel.prefix/share/example-robot-data/robots", "share/example-robot-data/robots"):
-            if (base / sub).is_dir():
-                return base / sub
-    raise UrdfError("example-robot-data is not installed (no share/example-robot-data/robots under "
-                    f"{sys.prefix} or site-packages): pip install example-robot-data")
 
 
 #: Numeric attributes checked before parsing: element tag -> attributes.
@@ -132,6 +111,37 @@ def _urdf_text(path: Path) -> tuple[str, tuple[str, ...], tuple[tuple[str, str],
             limit.set("effort", limit.get("effort", "1e6"))
             limit.set("velocity", limit.get("velocity", "1e3"))
     return ET.tostring(root, encoding="unicode"), tuple(continuous), tuple(mimic)
+
+
+#: Suffix given for the time of ``pinocchio.buildReducedModel`` to a frame that shares its name with a
+#: joint (:func:`_reduced_model`).
+_RENAMED = "@rc3r-frame"
+
+
+def _reduced_model(model, ids, q_ref):
+    """``pinocchio.buildReducedModel(model, ids, q_ref)``, also when a link and a joint share a name.
+
+    Pinocchio 3 looks the locked joints' frames up by name alone and refuses a name that two frames
+    carry ("Several frames match the filter"): the SO-100 of example-robot-data has a link and a
+    joint both named ``gripper``. The frames that are not joint frames but carry a joint's name are
+    renamed for the reduction and get their names back after it.
+    """
+    import pinocchio as pin
+
+    joints = set(model.names)
+    for frame in model.frames:
+        if frame.type != pin.FrameType.JOINT and frame.name in joints:
+            frame.name = frame.name + _RENAMED
+    try:
+        reduced = pin.buildReducedModel(model, ids, q_ref)
+    finally:
+        for frame in model.frames:
+            if frame.name.endswith(_RENAMED):
+                frame.name = frame.name[:-len(_RENAMED)]
+    for frame in reduced.frames:
+        if frame.name.endswith(_RENAMED):
+            frame.name = frame.name[:-len(_RENAMED)]
+    return reduced
 
 
 #: Below this many states, :meth:`PinocchioRobot.regressor` takes Pinocchio's path while the compiled
@@ -209,7 +219,8 @@ class PinocchioRobot(Robot):
     @classmethod
     def from_urdf(cls, path, lock: dict | None = None, robot_name: str | None = None,
                   label: str | None = None, gravity=None, seed: int = 0) -> "PinocchioRobot":
-        """Read a URDF; lock the joints of ``lock`` (``{"joint": value}``) at their values.
+        """Read a URDF (a path, or ``erd:REL`` for a file of example-robot-data: :data:`ERD_PREFIX`); lock
+        the joints of ``lock`` (``{"joint": value}``) at their values.
 
         ``continuous`` joints become ``revolute`` (module docstring). A ``<mimic>``
         joint must be locked. ``gravity`` (3,) [m/s^2] replaces Pinocchio's default
@@ -223,7 +234,7 @@ class PinocchioRobot(Robot):
         """
         import pinocchio as pin
 
-        path = require_file(path, "URDF", UrdfError)  # not found, not a file, a name too long ...
+        path = require_file(resolve_erd(path), "URDF", UrdfError)  # not found, not a file, a name too long ...
         text, continuous, mimic = _urdf_text(path)
         try:  # urdfdom prints its reason on fd 2: caught, and folded into the one line
             with native_stderr() as cpp:
@@ -233,9 +244,9 @@ class PinocchioRobot(Robot):
             raise UrdfError(cpp.folded(f"Pinocchio cannot read URDF {path}",
                                        msg[0] if msg else type(exc).__name__)) from None
         lock = dict(lock or {})
-        for joint, leader in mimic:
-            if joint not in lock:
-                raise UrdfError(f"{path}: joint '{joint}' mimics '{leader}': lock it (lock={{'{joint}': 0.0}})")
+        free = [(joint, leader) for joint, leader in mimic if joint not in lock]
+        if free:
+            raise UrdfError(mimic_advice(path, free))
         if lock:
             unknown = [j for j in lock if not model.existJointName(j)]
             if unknown:
@@ -245,19 +256,21 @@ class PinocchioRobot(Robot):
                 if model.joints[jid].nq != 1:
                     raise UrdfError(f"{path}: cannot lock joint '{joint}': it is not 1-DoF")
                 q_ref[model.idx_qs[jid]] = float(value)
-            model = pin.buildReducedModel(model, ids, q_ref)
+            model = _reduced_model(model, ids, q_ref)
         if gravity is not None:
             model.gravity = pin.Motion(np.asarray(gravity, dtype=float), np.zeros(3))
-        robot = cls(model, robot_name or model.name, label, urdf=str(path), seed=seed)
+        robot = cls(model, robot_name or model.name, label or erd_name(path), urdf=str(path), seed=seed)
         robot.locked, robot.continuous = {k: float(v) for k, v in lock.items()}, continuous
         return robot
 
     @classmethod
     def named(cls, name: str, **kwargs) -> "PinocchioRobot":
-        """An arm of example-robot-data by name (:data:`NAMED`: ``ur5``, ``panda`` with fingers locked)."""
+        """An arm of example-robot-data by name (:data:`NAMED`: ``ur5``, ``panda`` with fingers locked);
+        a ``lock`` keyword locks more joints (or the same at other values)."""
         if name not in NAMED:
             raise ConfigError(f"unknown named robot {name!r} (known: {', '.join(NAMED)})")
         rel, lock = NAMED[name]
+        lock = {**lock, **(kwargs.pop("lock", None) or {})}
         path = example_robot_data_dir() / rel
         if not path.is_file():
             raise UrdfError(f"example-robot-data has no {rel} under {path.parents[len(Path(rel).parts) - 1]}")

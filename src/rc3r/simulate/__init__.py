@@ -34,13 +34,22 @@ mode: positions within 1e-8 rad of the reference.
 
 A run that leaves its bounds (NaN, ``|q| > q_max``, ``|qd| > qd_max``,
 ``|u| > u_max``, M not positive definite) stops there; the result keeps the data up
-to then, its ``status``/``message`` say when and why, and
+to then, its ``outcome``/``message`` say when and why, and
 :meth:`SimResult.raise_for_status` raises :class:`~rc3r.errors.DivergenceError`.
+
+What a run means is its **verdict** (:attr:`SimResult.verdict`, :mod:`rc3r.simulate.verdict`):
+``clean``, ``chattering``, ``saturated``, ``limit-violated``, ``diverged`` (or ``interrupted``),
+the same word ``rc3r run``, ``rc3r paper``, the campaigns and ``metrics.json`` print.
+:attr:`SimResult.outcome` is only how the integration ended (``finished``, ``diverged``,
+``interrupted``: a chattering run has finished). ``SimResult.status`` (``"ok"`` for a finished
+run, also a chattering one) is a deprecated alias of ``outcome`` in its old words; the files
+keep their ``status`` field in those words (:func:`file_status`) for their existing readers.
 """
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -51,7 +60,7 @@ from .steps import (EFFECT_SUBSTEP_S, MAX_STEP_ANGLE, RIGID_SUBSTEP_S, STIFF_STE
                     _too_fast, continuous_method, default_substeps, period_budget, plant_method, stiffness)
 
 __all__ = ["SimOptions", "SimResult", "simulate", "ENGINES", "METHODS", "planned_engine", "default_substeps",
-           "stiffness", "plant_method", "SAMPLED_METHODS", "continuous_method"]
+           "stiffness", "plant_method", "SAMPLED_METHODS", "continuous_method", "file_status"]
 
 #: Engines accepted by :class:`SimOptions`: ``"auto"`` and every name and alias of the engine registry
 #: (:mod:`rc3r.simulate.engines`; a live view: ``"auto", "fast", "compiled", "python", "reference"`` and
@@ -212,7 +221,9 @@ class SimResult:
 
     Arrays: ``t`` (N,) [s]; ``q``, ``qd``, ``q_des``, ``u`` (N, n) [rad, rad/s, rad,
     N m]; ``z`` (N, nz) controller state; ``yt_r_norm`` (N,) = ``||Y^T r||``.
-    ``e = q - q_des``.
+    ``e = q - q_des``. :attr:`verdict` is what the run means (clean, chattering, saturated,
+    limit-violated, diverged, interrupted); ``outcome`` how the integration ended
+    (``"finished"``, ``"diverged"``, ``"interrupted"``); ``status`` is deprecated (module docstring).
     """
 
     t: np.ndarray
@@ -222,7 +233,7 @@ class SimResult:
     u: np.ndarray
     z: np.ndarray
     yt_r_norm: np.ndarray
-    status: str
+    outcome: str
     message: str
     t_end: float
     mode: str
@@ -251,7 +262,29 @@ class SimResult:
 
     @property
     def ok(self) -> bool:
-        return self.status == "ok"
+        """True if the integration reached the end (``outcome == "finished"``; see :attr:`verdict`)."""
+        return self.outcome == "finished"
+
+    @property
+    def status(self) -> str:
+        """Deprecated since 2026-12-06: :attr:`outcome` in its old words (``"ok"`` for a finished run, also a
+        chattering or saturated one). Read :attr:`verdict` for what the run means, :attr:`outcome` for
+        how the integration ended."""
+        import warnings
+
+        warnings.warn("SimResult.status is deprecated: read SimResult.verdict (clean, chattering, saturated, "
+                      "limit-violated, diverged, interrupted) or SimResult.outcome (finished, diverged, "
+                      "interrupted)", DeprecationWarning, stacklevel=2)
+        return file_status(self)
+
+    @cached_property
+    def verdict(self) -> str:
+        """What the run means, the word every command prints: ``clean``, ``chattering``, ``saturated``,
+        ``limit-violated``, ``diverged`` or ``interrupted`` (:func:`rc3r.simulate.verdict.verdict`, with
+        the plant's torque and joint limits recorded in :attr:`robot`; ``metrics.json``'s ``verdict``)."""
+        from .metrics import verdict_of
+
+        return verdict_of(self)["verdict"]
 
     def to_pandas(self):
         """The time series as a ``pandas.DataFrame`` indexed by t (columns: :mod:`.export`)."""
@@ -274,13 +307,35 @@ class SimResult:
     def raise_for_status(self) -> "SimResult":
         """Return self if the run finished; raise :class:`DivergenceError` (with ``.result``) if it
         diverged, ``KeyboardInterrupt`` if it was interrupted."""
-        if self.status == "interrupted":
+        if self.outcome == "interrupted":
             raise KeyboardInterrupt(self.message)
         if not self.ok:
             exc = DivergenceError(self.message)
             exc.result = self
             raise exc
         return self
+
+
+#: :attr:`SimResult.outcome` -> the ``status`` word of ``metrics.json``, ``runs.csv`` and ``SimResult.status``.
+_FILE_STATUS = {"finished": "ok"}
+
+
+def file_status(res) -> str:
+    """The ``status`` field of ``metrics.json`` and ``runs.csv``.
+
+    Parameters
+    ----------
+    res : SimResult
+        A run.
+
+    Returns
+    -------
+    str
+        ``res.outcome`` in the words those files have always used (``"ok"`` for ``"finished"``,
+        ``"diverged"``, ``"interrupted"``), kept for their readers (``rc3r montecarlo --resume`` reads
+        older rows). What a run means is its verdict (:attr:`SimResult.verdict`).
+    """
+    return _FILE_STATUS.get(res.outcome, res.outcome)
 
 
 def _limits(opt: SimOptions) -> np.ndarray:
@@ -300,7 +355,7 @@ def _initial_state(n: int, law, trajectory, x0) -> np.ndarray:
 
 def _message(status: int, t_end: float, opt: SimOptions, law=None) -> str:
     if status == S.OK:
-        return "ok"
+        return f"finished at t = {t_end:.6g} s"
     if status == S.INTERRUPTED:
         return f"interrupted at t = {t_end:.6g} s (Ctrl-C or SIGTERM); the data up to then is kept"
     if status == S.WORK and opt.rate is not None:
@@ -401,8 +456,8 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     Returns
     -------
     SimResult
-        With ``status == "ok"`` or the divergence message; never raises for a
-        diverging run (call :meth:`SimResult.raise_for_status` for that).
+        With ``outcome == "finished"`` or the divergence message (``verdict``: what the run means);
+        never raises for a diverging run (call :meth:`SimResult.raise_for_status` for that).
         ``wall_time_s`` never includes numba's compilation: the first fast run of a
         process first runs two output periods, untimed.
 
@@ -413,8 +468,8 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     >>> import rc3r
     >>> spec = rc3r.build_run(controller="robust", perturbed=True, duration=0.5)
     >>> res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-    >>> res.status, res.engine, res.q.shape
-    ('ok', 'fast', (501, 3))
+    >>> res.verdict, res.outcome, res.engine, res.q.shape
+    ('clean', 'finished', 'fast', (501, 3))
     >>> bool(abs(res.e).max() < 1e-3)
     True
     """
@@ -470,7 +525,7 @@ def _result(plant, law, trajectory, opt, t, X, U, R, yn, status, t_end, nrhs, ns
     n = plant.n
     return SimResult(
         t=t, q=X[:, 0:n].copy(), qd=X[:, n:2 * n].copy(), q_des=R.copy(), u=U.copy(), z=X[:, 2 * n:].copy(),
-        yt_r_norm=yn.copy(), status={S.OK: "ok", S.INTERRUPTED: "interrupted"}.get(status, "diverged"),
+        yt_r_norm=yn.copy(), outcome={S.OK: "finished", S.INTERRUPTED: "interrupted"}.get(status, "diverged"),
         message=_message(status, t_end, opt, law), t_end=float(t_end), mode=opt.mode, engine=opt.engine,
         options=opt, plant=plant.label, controller=law.describe(),
         trajectory=trajectory.describe(), rhs_evals=int(nrhs), steps=int(nsteps),

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["run_metrics", "CHATTERING_DEFINITION"]
+__all__ = ["run_metrics", "verdict_of", "CHATTERING_DEFINITION"]
 
 CHATTERING_DEFINITION = "total variation of u per second [N m/s] (sampled: every sample; continuous: 1 kHz grid)"
 
@@ -39,6 +39,24 @@ def _layer(res, eps):
         return None
     x = np.asarray(res.yt_r_norm[1:]) / float(eps)
     return {"median": float(np.median(x)), "max": float(x.max()), "outside": float(np.mean(x > 1.0))}
+
+
+def verdict_of(res, tolerance=None) -> dict:
+    """The verdict of a run with its plant's recorded limits.
+
+    Parameters
+    ----------
+    res : rc3r.simulate.SimResult
+        A run; the plant's torque and joint limits are read from ``res.robot["effects"]``.
+    tolerance : float, optional
+        Tracking tolerance [rad] (default :data:`~rc3r.simulate.verdict.TOLERANCE`).
+
+    Returns
+    -------
+    dict
+        :func:`rc3r.simulate.verdict.verdict`'s dict (``verdict``, ``tolerance_met``, ...).
+    """
+    return _verdict(res, tolerance)
 
 
 def _verdict(res, tolerance) -> dict:
@@ -65,6 +83,8 @@ def run_metrics(res, seed=None, tolerance=None) -> dict:
     """The metrics of ``res`` as a JSON-ready dict (definitions in the module docstring);
     ``tolerance`` [rad] of the verdict's ``tolerance_met`` (default
     :data:`rc3r.simulate.verdict.TOLERANCE`)."""
+    from . import file_status
+
     e = res.e
     nan = [float("nan")] * res.q.shape[1]
     T = max(res.t_end, 1e-12)
@@ -82,7 +102,7 @@ def run_metrics(res, seed=None, tolerance=None) -> dict:
         "rate_hz": res.options.rate,
         "engine": res.engine,
         "trajectory": res.trajectory,
-        "status": res.status,
+        "status": file_status(res),  # how the integration ended, in the files' words; the verdict is below
         "message": res.message,
         "t_end": float(res.t_end),
         "theta_model": _tolist(c.get("theta", [])),

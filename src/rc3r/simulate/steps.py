@@ -39,10 +39,10 @@ MAX_STEP_ANGLE = 0.02
 
 
 def _too_fast(res, opt) -> bool:
-    """True if a sampled run on default sub-steps did not end ``ok`` or moved more than
+    """True if a sampled run on default sub-steps did not finish or moved more than
     :data:`MAX_STEP_ANGLE` per sub-step (then :func:`simulate` redoes it with finer steps)."""
-    if res.status != "ok":
-        return res.status != "interrupted"
+    if res.outcome != "finished":
+        return res.outcome != "interrupted"
     h = (1.0 / opt.rate) / opt.substeps
     qd = np.abs(np.asarray(res.qd, dtype=float))
     return bool(qd.size and np.nanmax(qd) * h > MAX_STEP_ANGLE)

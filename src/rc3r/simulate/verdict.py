@@ -3,7 +3,7 @@ r"""The verdict of a run: what a user should conclude from it, beyond "it did no
 One word, the first that applies in this order:
 
 * ``interrupted`` -- stopped by Ctrl-C or SIGTERM (nothing to conclude);
-* ``diverged`` -- the run left its bounds or could not be integrated (status ``diverged``);
+* ``diverged`` -- the run left its bounds or could not be integrated (``SimResult.outcome`` ``diverged``);
 * ``limit-violated`` -- a joint left its position or velocity range
   (:class:`~rc3r.plants.limits.JointLimits`; the motion would not be possible on the arm);
 * ``saturated`` -- the delivered torque sat at an actuator limit for more than
@@ -103,9 +103,9 @@ def verdict(res, *, saturation=None, limits=None, tolerance: float = TOLERANCE) 
     """
     chat = chattering(res)
     sat = saturation_fraction(res, saturation)
-    if res.status == "interrupted":
+    if res.outcome == "interrupted":
         word = "interrupted"
-    elif res.status != "ok":
+    elif res.outcome != "finished":
         word = "diverged"
     elif limits is not None and limits.get("violated"):
         word = "limit-violated"
