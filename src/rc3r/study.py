@@ -232,7 +232,8 @@ def _bounds_plant(nominal, bf: dict, spec: str):
     :func:`rc3r.identify.bounds_file.load_bounds`; :func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`)."""
     from .uncertainty.ellipsoid import draw_from_ellipsoid
 
-    return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}")
+    return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}",
+                               physical=bf.get("physical"))
 
 
 def _payload_plant(nominal, payload, spec: str):
@@ -418,6 +419,8 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     if traj.n != the_plant.n:
         raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")
     sim = dict(cfg.get("simulation", {}))
+    _check_model_mass(nominal, model, traj, duration if duration is not None else sim.get("duration"), bounds_path if perturbed else None,
+                      model_cfg.get("theta"))
     if rate is not None:
         sim["rate"] = rate
     if sim.get("rate") in (0, 0.0):
@@ -451,6 +454,21 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     law = _law(kind, model, ctrl_cfg, eps, table or {})
     return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings),
                    true_plant, loop, nominal, tolerance if tolerance is not None else cfg.get("tolerance"))
+
+
+def _check_model_mass(nominal, model: dict, traj, duration, bounds_path, theta_cfg) -> None:
+    """Refuse (one line) a model theta from a bounds file or a config list whose mass matrix is not positive
+    definite along the reference (:func:`rc3r.uncertainty.ellipsoid.require_positive_mass_matrix`)."""
+    if bounds_path is not None:
+        source = f"bounds file {bounds_path}"
+    elif isinstance(theta_cfg, list):
+        source = "model theta of the config"
+    else:
+        return
+    from .uncertainty.ellipsoid import require_positive_mass_matrix
+
+    require_positive_mass_matrix(nominal, model["theta0"], traj, float(duration if duration is not None else 10.0),
+                                 source)
 
 
 def _nominal(robot: str | None, urdf=None, lock: dict | None = None):

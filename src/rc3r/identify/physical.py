@@ -63,14 +63,17 @@ from ..errors import ConfigError
 __all__ = ["GAMMAS", "RESIDUAL_SLACK", "MAX_EVALUATIONS", "RULE_STAMPS", "PRIOR_FLOOR", "INSIDE_DRAWS", "REALISE_DRAWS", "upper_cholesky", "log_cholesky_of",
            "standard_of", "standard_jacobian", "divergence", "covariance_factor", "realise_log_cholesky", "draws_inside", "PhysicalFit", "fit_physical", "draw_standard"]
 
-#: Prior weights tried, largest first (units: the data term is a Mahalanobis distance, chi2-like).
-GAMMAS = tuple(10.0 ** k for k in range(4, -4, -1))
+#: Prior weights tried, largest first (units: the data term is a Mahalanobis distance, chi2-like). The
+#: smallest, 1, is the weakest prior kept: ``exp(-d/2)`` is a Wishart density of one degree of freedom,
+#: a barrier that keeps every pseudo-inertia well inside the consistent set and the Laplace covariance
+#: finite in the directions the data do not see.
+GAMMAS = (1e4, 1e3, 1e2, 1e1, 1.0)
 
 #: The rule for gamma: the fit's per-joint training RMS at most (1 + this) x the unconstrained one's.
 RESIDUAL_SLACK = 0.03
 
 #: Function evaluations of one least-squares solve (per gamma; warm-started).
-MAX_EVALUATIONS = 150
+MAX_EVALUATIONS = 300
 
 #: A prior pseudo-inertia's eigenvalues are floored at this x its largest (only if not positive definite).
 PRIOR_FLOOR = 1e-3
@@ -82,7 +85,7 @@ RULE_STAMPS = 5000
 INSIDE_DRAWS = 1000
 
 #: Seeded draws uniform in the ellipsoid whose realisation by physical link parameters is measured.
-REALISE_DRAWS = 50
+REALISE_DRAWS = 20
 
 _SQRT2 = float(np.sqrt(2.0))
 #: Position in U (row, column) of eta's entries 1..9 (alpha scales all).
@@ -269,8 +272,11 @@ def covariance_factor(cov) -> np.ndarray:
     return (V * np.sqrt(np.maximum(lam, 0.0))) @ V.T
 
 
-def realise_log_cholesky(T, theta, eta_start, S, iterations: int = 40, rtol: float = 1e-10):
+def realise_log_cholesky(T, theta, eta_start, S, iterations: int = 40, rtol: float = 1e-10, best: bool = False):
     r"""Log-Cholesky parameters near ``eta_start`` whose base coefficients ``T pi(eta)`` are ``theta``, or None.
+
+    With ``best``, the last iterate instead of None when ``theta`` is not reached (the nearest physical
+    coefficients the steps found: a real rigid body whose ``T pi`` the caller must check).
 
     Gauss-Newton with minimum-norm steps in the metric of ``S`` (``S S^T`` the Laplace covariance of
     ``eta``): :math:`\eta \leftarrow \eta + S (J S)^+ (	heta - T\pi(\eta))`, ``J = T d pi / d eta``,
@@ -285,18 +291,23 @@ def realise_log_cholesky(T, theta, eta_start, S, iterations: int = 40, rtol: flo
         if miss <= rtol:
             return eta
         JS = T @ standard_jacobian(eta) @ S
-        step = S @ (np.linalg.pinv(JS, rcond=1e-12) @ r)
+        Gm = JS @ JS.T  # the minimum-norm step S JS^T (JS JS^T)^-1 r (Cholesky: no SVD, fast and thread-free)
+        Gm[np.diag_indices_from(Gm)] += 1e-12 * np.trace(Gm) / Gm.shape[0]
+        try:
+            step = S @ (JS.T @ np.linalg.solve(Gm, r))
+        except np.linalg.LinAlgError:
+            break
         for _ in range(30):
             with np.errstate(over="ignore", invalid="ignore"):
                 r_new = theta - T @ standard_of(eta + step)
-            m_new = float(np.linalg.norm(r_new)) / scale
+                m_new = float(np.linalg.norm(r_new)) / scale
             if np.isfinite(m_new) and m_new < miss:
                 break
             step = step / 2.0
         else:
-            return None
+            break
         eta, r, miss = eta + step, r_new, m_new
-    return eta if miss <= rtol else None
+    return eta if miss <= rtol or best else None
 
 
 def draws_inside(fit, T, P, rng, draws: int = INSIDE_DRAWS) -> float:
@@ -385,9 +396,10 @@ def fit_physical(robot, x_hat, cov, A, y, friction_kinds, seed: int = 0, gammas=
     z = np.concatenate([eta0, np.clip(x_hat[p:], lo[10 * nb:], None)])
     path, chosen, fits = [], None, []
     for g in gammas:
-        sol = least_squares(residuals, z, jac=lambda z_, g_=g: jacobian(z_, g_)[0], bounds=(lo, hi), args=(g,),
-                            method="trf", x_scale="jac", xtol=1e-10, ftol=1e-10, gtol=1e-10,
-                            max_nfev=MAX_EVALUATIONS)
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            sol = least_squares(residuals, z, jac=lambda z_, g_=g: jacobian(z_, g_)[0], bounds=(lo, hi), args=(g,),
+                                method="trf", tr_solver="lsmr", x_scale="jac", xtol=1e-10, ftol=1e-10, gtol=1e-10,
+                                max_nfev=MAX_EVALUATIONS)
         z = sol.x
         x = x_of(z)
         ratio = train_rms(x) / rms_hat

@@ -292,7 +292,7 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
 
     from .consistency import standard_map
     from .physical import (GAMMAS, INSIDE_DRAWS, PRIOR_FLOOR, REALISE_DRAWS, RESIDUAL_SLACK, covariance_factor,
-                           draws_inside, fit_physical, realise_log_cholesky)
+                           draws_inside, fit_physical, realise_log_cholesky, standard_of)
 
     t0 = time.perf_counter()
     pf = fit_physical(robot, fit.x, fit.cov, R_tr, tau_tr, kinds, seed=seed)
@@ -302,15 +302,19 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
     T = standard_map(robot, seed)
     share = draws_inside(pf, T, ell["P"], np.random.default_rng(seed))
     # what a campaign draws (rc3r.uncertainty.ellipsoid.draw_from_ellipsoid): theta uniform in the ellipsoid,
-    # realised in the log-Cholesky chart from a Gaussian draw of eta
+    # realised in the log-Cholesky chart from the consistent estimate's parameters
     from ..uncertainty.ellipsoid import draw_theta
 
     rng = np.random.default_rng(seed)
     S = covariance_factor(pf.cov_eta)
     t1 = time.perf_counter()
-    realised = sum(realise_log_cholesky(T, draw_theta(pf.theta, ell["P"], rng),
-                                        pf.eta + S @ rng.standard_normal(pf.eta.size), S) is not None
-                   for _ in range(REALISE_DRAWS))
+    realised = reached = 0
+    for _ in range(REALISE_DRAWS):
+        th = draw_theta(pf.theta, ell["P"], rng)
+        eta = realise_log_cholesky(T, th, pf.eta, S, best=True)
+        dd = T @ standard_of(eta) - pf.theta
+        realised += bool(np.linalg.norm(T @ standard_of(eta) - th) <= 1e-10 * np.linalg.norm(th))
+        reached += bool(dd @ ell["P"] @ dd <= 1.0 + 1e-9)
     t_realise = (time.perf_counter() - t1) / REALISE_DRAWS
     pred = R_te @ pf.x
     half = _est.Fit(pf.x, pf.cov, fit.sigma, fit.rows, fit.cond, fit.weights).band(R_te, sigma_raw, confidence)
@@ -343,11 +347,14 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
         "ellipsoid": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in ell.items() if k != "P"},
         "draws_inside": {"share": share, "draws": INSIDE_DRAWS, "seed": int(seed),
                          "realised": realised / REALISE_DRAWS, "realise_draws": REALISE_DRAWS,
+                         "plants_inside": reached / REALISE_DRAWS,
                          "seconds_per_realised_draw": t_realise,
                          "meaning": "share: of log-Cholesky draws eta ~ N(eta*, Cov(eta)) (all physical), those whose "
                                     "theta lies inside this ellipsoid; realised: of theta uniform in the ellipsoid, "
-                                    "those realised by physical link parameters (log-Cholesky Gauss-Newton from a "
-                                    "Gaussian draw of eta), as montecarlo and design draw plants"},
+                                    "those realised by physical link parameters (log-Cholesky Gauss-Newton from the "
+                                    "consistent estimate's), as run, montecarlo and design draw plants; plants_inside: of those draws, the "
+                                    "ones whose realised (or nearest reached) physical coefficients lie in the ellipsoid "
+                                    "(usable plants)"},
         "covariance": pf.cov.tolist(), "seconds": elapsed,
         "method": "min (x - x_ls)^T Cov^-1 (x - x_ls) + gamma sum_k d(J_k || J0_k) over the log-Cholesky parameters "
                   "of every link (scipy least_squares); d the log-det divergence from the URDF's pseudo-inertia; "
