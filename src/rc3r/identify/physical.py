@@ -70,7 +70,7 @@ __all__ = ["GAMMAS", "RESIDUAL_SLACK", "MAX_EVALUATIONS", "RULE_STAMPS", "PRIOR_
 GAMMAS = (1e4, 1e3, 1e2, 1e1, 1.0)
 
 #: The rule for gamma: the fit's per-joint training RMS at most (1 + this) x the unconstrained one's.
-RESIDUAL_SLACK = 0.03
+RESIDUAL_SLACK = 0.02
 
 #: Function evaluations of one least-squares solve (per gamma; warm-started).
 MAX_EVALUATIONS = 300
@@ -189,11 +189,9 @@ def _prior(robot):
     for k in range(nb):
         J0 = pseudo_inertia(pi0[10 * k:10 * k + 10])
         lam, V = np.linalg.eigh(J0)
-        floor = PRIOR_FLOOR * max(float(lam[-1]), 1e-12)
-        if lam[0] < floor:
-            if lam[0] <= 0:
-                repaired.append(k + 1)
-            J0 = (V * np.maximum(lam, floor)) @ V.T
+        if lam[0] <= 0:  # not a rigid body: floor its eigenvalues
+            repaired.append(k + 1)
+            J0 = (V * np.maximum(lam, PRIOR_FLOOR * max(float(lam[-1]), 1e-12))) @ V.T
         U0 = upper_cholesky(J0)
         inv.append(np.linalg.inv(U0))
         a = np.log(U0[3, 3])

@@ -298,7 +298,10 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
     pf = fit_physical(robot, fit.x, fit.cov, R_tr, tau_tr, kinds, seed=seed)
     elapsed = time.perf_counter() - t0
     p = robot.p
-    ell = _est.ellipsoid(pf.cov_theta, confidence, dof=dof)
+    # the bounds' ellipsoid: centred at the consistent estimate, shaped by the data's covariance (the
+    # unconstrained estimate's): the prior moves the centre into the consistent set, it does not shrink
+    # the uncertainty (a URDF's inertias can be wrong: docs/identification.md)
+    ell = _est.ellipsoid(fit.cov[:p, :p], confidence, dof=dof)
     T = standard_map(robot, seed)
     share = draws_inside(pf, T, ell["P"], np.random.default_rng(seed))
     # what a campaign draws (rc3r.uncertainty.ellipsoid.draw_from_ellipsoid): theta uniform in the ellipsoid,
