@@ -403,6 +403,11 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         from .identify.bounds_file import load_bounds
 
         bounds_file = load_bounds(bounds_path, robot=nominal)  # read once: for the plant and for the model
+        if file_model:  # before any plant is drawn from it: a centre that is no rigid body is refused first
+            dur = duration if duration is not None else dict(cfg.get("simulation", {})).get("duration")
+            _check_model_mass(nominal, {"theta0": bounds_file["theta0"]},
+                              trajectory_from_config(dict(cfg.get("trajectory", {})), nominal.default_trajectory()),
+                              dur, bounds_path, None)
     the_plant = (_bounds_plant(nominal, bounds_file, spec) if bounds_path is not None and _drawn(spec)
                  else _plant(nominal, box_bounds, spec, seed))
     if bounds_path is not None:
@@ -419,8 +424,9 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     if traj.n != the_plant.n:
         raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")
     sim = dict(cfg.get("simulation", {}))
-    _check_model_mass(nominal, model, traj, duration if duration is not None else sim.get("duration"), bounds_path if perturbed else None,
-                      model_cfg.get("theta"))
+    if bounds_path is None:  # a bounds file's centre was checked when it was read
+        _check_model_mass(nominal, model, traj, duration if duration is not None else sim.get("duration"), None,
+                          model_cfg.get("theta"))
     if rate is not None:
         sim["rate"] = rate
     if sim.get("rate") in (0, 0.0):
