@@ -143,23 +143,25 @@ def _write(path, log):
 
 def test_cli_writes_identified_json_and_bounds_toml(tmp_path, result, capsys):
     """identified.json has theta, friction, covariance, validation (rms, rms_filtered, inside_band),
-    consistency, filter, provenance; bounds.toml loads back (validated, fitting the arm) with exactly the
-    ellipsoid of the fit; the figures exist; a rerun without --force is refused and leaves them intact."""
+    consistency, physical, filter, provenance; bounds.toml loads back (validated, fitting the arm) with
+    exactly the physically consistent estimate's centre and ellipsoid and its link parameters; the figures exist; a rerun without --force is refused and leaves them intact."""
     res, _, log = result
     path = _write(tmp_path / "log.csv", log)
     out = tmp_path / "id"
     assert main(["identify", path, "--robot", "rr3", "--out", str(out)]) == 0
     captured = capsys.readouterr()
-    assert "held-out rms" in captured.out and "bounds at 95 %" in captured.out
+    assert "held-out rms" in captured.out and "bounds of the physically consistent estimate at 95 %" in captured.out
+    assert "physically consistent fit (gamma" in captured.out and "link masses [kg]" in captured.out
     data = json.loads((out / "identified.json").read_text())
-    for key in ("theta", "friction", "covariance", "validation", "consistency", "filter", "provenance"):
+    for key in ("theta", "friction", "covariance", "validation", "consistency", "physical", "filter", "provenance"):
         assert key in data
     assert len(data["validation"]["rms"]) == 3 and len(data["validation"]["rms_filtered"]) == 3
     assert np.allclose(data["theta"], res.theta, rtol=0, atol=1e-9 * np.abs(res.theta).max())
     b = load_bounds(out / "bounds.toml", robot=rc3r.load_robot("rr3"))
     assert b["robot"] == "rr3" and (b["n"], b["p"]) == (3, 15)
-    np.testing.assert_array_equal(b["theta0"], np.asarray(data["theta"]))
-    assert b["rho"] == data["ellipsoid"]["rho"] and b["confidence"] == 0.95
+    np.testing.assert_array_equal(b["theta0"], np.asarray(data["physical"]["theta"]))
+    np.testing.assert_array_equal(b["physical"]["log_cholesky"], np.asarray(data["physical"]["log_cholesky"]))
+    assert b["rho"] == data["physical"]["ellipsoid"]["rho"] and b["confidence"] == 0.95
     for name in ("torque.png", "residuals.png"):
         assert (out / name).stat().st_size > 10_000
     before = (out / "bounds.toml").read_bytes()
