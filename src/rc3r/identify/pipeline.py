@@ -291,7 +291,7 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
     import time
 
     from .consistency import standard_map
-    from .physical import (GAMMAS, INSIDE_DRAWS, PRIOR_FLOOR, REALISE_DRAWS, RESIDUAL_SLACK, covariance_factor,
+    from .physical import (GAMMAS, INSIDE_DRAWS, MAHALANOBIS_SLACK, PRIOR_FLOOR, REALISE_DRAWS, covariance_factor,
                            draws_inside, fit_physical, realise_log_cholesky, standard_of)
 
     t0 = time.perf_counter()
@@ -339,9 +339,9 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
         "min_pseudo_inertia_eigenvalues": pf.info["min_eigenvalues"],
         "divergence_per_link": pf.info["divergence_per_body"],
         "gamma": pf.gamma,
-        "gamma_rule": f"the largest gamma of {GAMMAS[0]:g} .. {GAMMAS[-1]:g} (decades) whose per-joint training "
-                      f"RMS (low-passed) is at most {1 + RESIDUAL_SLACK:g} x the unconstrained one's on every joint "
-                      "(else the smallest)",
+        "gamma_rule": f"of {', '.join(f'{g:g}' for g in GAMMAS)} (each fitted, warm-started), the largest whose "
+                      "Mahalanobis distance to the unconstrained estimate exceeds the smallest gamma's by at most "
+                      f"{MAHALANOBIS_SLACK:g}",
         "gamma_path": pf.path, "prior_repaired_links": pf.info["repaired"], "prior_floor": PRIOR_FLOOR,
         "validation": {"rms": np.sqrt(np.mean((tau_te - pred) ** 2, axis=0)).tolist(),
                        "rms_filtered": np.sqrt(np.mean((y_te - A_te @ pf.x) ** 2, axis=0)).tolist(),
