@@ -214,7 +214,7 @@ PANDA_RMS_TARGETS = (0.33, 0.44, 0.29, 0.46, 0.12, 0.13, 0.07)
 
 
 @pytest.mark.skipif(_shared_panda() is None,
-                    reason="the real Panda log (GPL-3) is not here: <repo>/../shared/data/panda_gaz or RC3R_SHARED_DATA")
+                    reason="the real Panda log (GPL-3) is absent: <repo>/../shared/data/panda_gaz or RC3R_SHARED_DATA")
 def test_real_panda_log_gives_a_consistent_plausible_accurate_estimate():
     """Cut-off 5 Hz, last 30 % held out (the evaluation of this branch: predictions at the pipeline's
     prediction states): Pinocchio's pseudo-inertias PD, every link mass within 3x of the URDF's, held-out

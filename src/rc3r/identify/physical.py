@@ -32,8 +32,9 @@ pseudo-inertias from the URDF's ``J_0`` (Lee, Wensing, Park, "Geometric robot dy
 identification: a convex programming approach", IEEE T-RO 2020): the directions of ``eta`` that
 the data cannot see keep the URDF's values. With ``A = U_0^{-1} U`` (upper triangular, diagonal
 ``a_i > 0``), ``d = sum_{i<j} A_ij^2 + sum_i (a_i^2 - 1 - 2 log a_i)``: a sum of squares, so
-``F`` is solved by :func:`scipy.optimize.least_squares` (trust region reflective, analytic
-Jacobian), every iterate physical. ``exp(-gamma d / 2)`` is a Wishart density in ``J`` (mean
+``F`` is solved by :func:`scipy.optimize.least_squares` (trust region reflective with LSMR: no SVD,
+analytic Jacobian, at most :data:`MAX_EVALUATIONS` evaluations per ``gamma``), every iterate
+physical. ``exp(-gamma d / 2)`` is a Wishart density in ``J`` (mean
 ``J_0``), so ``F/2`` is a negative log posterior.
 
 **The prior weight** ``gamma``: every ``gamma`` of :data:`GAMMAS` is fitted (largest first, each fit
@@ -48,12 +49,15 @@ body whose ``J_0`` is not positive definite (the paper's 3R violates the triangl
 its eigenvalues floored at :data:`PRIOR_FLOOR` times its largest (reported: ``prior_repaired``).
 
 **Uncertainty** (Laplace approximation). ``Cov(z) = (R^T R)^{-1}`` with ``R`` the Jacobian of
-the residuals at the optimum (Gauss-Newton Hessian of ``F/2``); the coefficients' covariance is
-``G Cov(z) G^T``, ``G = d theta / d z`` (the delta method): the confidence ellipsoid of
-``bounds.toml`` is centred at ``theta(z*)`` with this covariance. Plants drawn as
-``eta ~ N(eta*, Cov(eta))`` (:func:`draw_standard`) are all physical; the share of them whose
-``theta`` falls inside the ellipsoid is reported (``draws_inside``; about the confidence level
-when the chart is nearly linear over the spread).
+the residuals at the optimum (Gauss-Newton Hessian of ``F/2``); ``PhysicalFit.cov`` is
+``G Cov(z) G^T``, ``G = d x / d z`` (the delta method). The confidence ellipsoid of ``bounds.toml``
+is centred at ``theta(z*)`` and shaped by the *data's* covariance (the unconstrained estimate's,
+:func:`rc3r.identify.pipeline.identify`): the prior moves the centre, it does not shrink the
+uncertainty. Draws ``eta ~ N(eta*, Cov(eta))`` (:func:`draw_standard`) are all physical; the share
+of them whose ``theta`` falls inside the ellipsoid is reported (:func:`draws_inside`): small when the
+directions of ``eta`` the data do not see are wide (they move ``theta`` at second order), so plants
+are drawn in the ellipsoid and realised in the chart instead (:func:`realise_log_cholesky`,
+:func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`).
 """
 from __future__ import annotations
 
@@ -63,8 +67,10 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["GAMMAS", "MAHALANOBIS_SLACK", "MAX_EVALUATIONS", "RULE_STAMPS", "PRIOR_FLOOR", "INSIDE_DRAWS", "REALISE_DRAWS", "upper_cholesky", "log_cholesky_of",
-           "standard_of", "standard_jacobian", "divergence", "covariance_factor", "realise_log_cholesky", "draws_inside", "PhysicalFit", "fit_physical", "draw_standard"]
+__all__ = ["GAMMAS", "MAHALANOBIS_SLACK", "MAX_EVALUATIONS", "RULE_STAMPS", "PRIOR_FLOOR", "INSIDE_DRAWS",
+           "REALISE_DRAWS", "upper_cholesky", "log_cholesky_of", "standard_of", "standard_jacobian", "divergence",
+           "covariance_factor", "realise_log_cholesky", "draws_inside", "PhysicalFit", "fit_physical",
+           "draw_standard"]
 
 #: Prior weights tried, largest first (units: the data term is a Mahalanobis distance, chi2-like). The
 #: smallest, 1, is the weakest prior kept: ``exp(-d/2)`` is a Wishart density of one degree of freedom,
@@ -146,7 +152,8 @@ def standard_jacobian(eta) -> np.ndarray:
     nb = eta.size // 10
     G = np.zeros((10 * nb, 10 * nb))
     for k in range(nb):
-        G[10 * k:10 * k + 10, 10 * k:10 * k + 10] = pin.LogCholeskyParameters(eta[10 * k:10 * k + 10]).calculateJacobian()
+        block = pin.LogCholeskyParameters(eta[10 * k:10 * k + 10])
+        G[10 * k:10 * k + 10, 10 * k:10 * k + 10] = block.calculateJacobian()
     return G
 
 
@@ -314,7 +321,8 @@ def realise_log_cholesky(T, theta, eta_start, S, iterations: int = 40, rtol: flo
 
 
 def draws_inside(fit, T, P, rng, draws: int = INSIDE_DRAWS) -> float:
-    """Share of ``eta ~ N(fit.eta, fit.cov_eta)`` (all physical) with ``T pi(eta)`` in the ellipsoid ``P`` about ``fit.theta``."""
+    """Share of ``draws`` seeded ``eta ~ N(fit.eta, fit.cov_eta)`` (all physical) whose ``T pi(eta)`` lies in
+    the ellipsoid ``P`` about ``fit.theta``."""
     with np.errstate(over="ignore", invalid="ignore"):
         d = draw_standard(fit, rng, draws) @ np.asarray(T).T - fit.theta
         q = np.einsum("ki,ij,kj->k", d, np.asarray(P), d)

@@ -355,9 +355,9 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
                          "meaning": "share: of log-Cholesky draws eta ~ N(eta*, Cov(eta)) (all physical), those whose "
                                     "theta lies inside this ellipsoid; realised: of theta uniform in the ellipsoid, "
                                     "those realised by physical link parameters (log-Cholesky Gauss-Newton from the "
-                                    "consistent estimate's), as run, montecarlo and design draw plants; plants_inside: of those draws, the "
-                                    "ones whose realised (or nearest reached) physical coefficients lie in the ellipsoid "
-                                    "(usable plants)"},
+                                    "consistent estimate's), as run, montecarlo and design draw plants; "
+                                    "plants_inside: of those draws, the ones whose realised (or nearest reached) "
+                                    "physical coefficients lie in the ellipsoid (usable plants)"},
         "covariance": pf.cov.tolist(), "seconds": elapsed,
         "method": "min (x - x_ls)^T Cov^-1 (x - x_ls) + gamma sum_k d(J_k || J0_k) over the log-Cholesky parameters "
                   "of every link (scipy least_squares); d the log-det divergence from the URDF's pseudo-inertia; "
