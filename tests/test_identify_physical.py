@@ -231,3 +231,24 @@ def test_real_panda_log_gives_a_consistent_plausible_accurate_estimate():
     rms = res.held_out_rms(pf.x)
     assert np.all(rms <= np.asarray(PANDA_RMS_TARGETS)), rms
     assert require_positive_mass_matrix(panda, res.bounds()["theta0"], panda.default_trajectory(), 10.0, "x") > 0
+
+
+def test_indefinite_model_theta_of_a_config_is_refused(tmp_path, capsys):
+    """A config's [model] theta list whose mass matrix is not positive definite (the UR5's theta negated:
+    M = -M_nominal; the FBL law takes it) is refused by run in one line, exit 2, naming the smallest eigenvalue."""
+    ur5 = rc3r.load_robot("ur5")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('robot = "ur5"\n[model]\ntheta = [' + ", ".join(repr(float(-x)) for x in ur5.theta)
+                   + "]\n")
+    rc = main(["run", "--config", str(cfg), "--controller", "fbl", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "model theta of the config" in err and "not positive definite" in err and "smallest eigenvalue -" in err
+
+
+def test_no_physical_bounds_are_the_unconstrained_estimate(pendulum_result):
+    """bounds("unconstrained") is the least-squares centre and ellipsoid, without link parameters."""
+    res, _ = pendulum_result
+    b = res.bounds("unconstrained")
+    np.testing.assert_array_equal(b["theta0"], res.theta)
+    assert "physical" not in b
