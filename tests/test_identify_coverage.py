@@ -40,7 +40,7 @@ def test_true_theta_is_inside_the_ellipsoid_at_the_stated_confidence():
     for seed in range(LOGS):
         log, truth = sample_log(motion, seed=seed)
         res = identify(arm, log, confidence=CONFIDENCE, consistency=False, cutoff_hz=2.0,
-                       velocities="differentiated", weighting="per-joint", coulomb_velocity=0.0)
+                       velocities="differentiated", weighting="per-joint", coulomb_velocity=0.0, physical=False)
         d = res.theta - truth["theta"]
         m = float(d @ np.linalg.solve(res.cov_theta, d))
         m2.append(m / arm.p)

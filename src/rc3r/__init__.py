@@ -56,6 +56,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.identify.regressors``           identification regressor: the arm's Y and per-joint friction columns
 ``rc3r.identify.estimate``             weighted least squares, per-joint noise, covariance, confidence ellipsoid
 ``rc3r.identify.consistency``          physical consistency: SDP on the pseudo-inertia matrices (cvxpy)
+``rc3r.identify.physical``             the physically consistent estimate: log-Cholesky least squares, log-det prior
 ``rc3r.identify.excitation``           exciting trajectories: Fourier series, condition number minimised
 ``rc3r.identify.bounds_file``          ``bounds.toml``: written by identify, read by :func:`load_bounds`
 ``rc3r.identify.synthetic``            synthetic logs of a known arm at stated noise levels

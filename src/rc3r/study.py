@@ -270,7 +270,8 @@ def _bounds_plant(nominal, bf: dict, spec: str):
     :func:`rc3r.identify.bounds_file.load_bounds`; :func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`)."""
     from .uncertainty.ellipsoid import draw_from_ellipsoid
 
-    return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}")
+    return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}",
+                               physical=bf.get("physical"))
 
 
 def _payload_plant(nominal, payload, spec: str, ubox=None):
@@ -466,6 +467,11 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         bounds_file = load_bounds(bounds_path, robot=nominal)  # read once: for the plant and for the model
         _check_bounds_robot(bounds_file, robot or cfg.get("robot"),
                             urdf if urdf is not None else cfg.get("urdf"))
+        if file_model:  # before any plant is drawn from it: a centre that is no rigid body is refused first
+            dur = duration if duration is not None else dict(cfg.get("simulation", {})).get("duration")
+            _check_model_mass(nominal, {"theta0": bounds_file["theta0"]},
+                              trajectory_from_config(dict(cfg.get("trajectory", {})), nominal.default_trajectory()),
+                              dur, bounds_path, None)
     the_plant = (_bounds_plant(nominal, bounds_file, spec) if bounds_path is not None and _drawn(spec)
                  else _plant(nominal, box_bounds, spec, seed))
     if bounds_path is not None:
@@ -482,6 +488,9 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     if traj.n != the_plant.n:
         raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")
     sim = dict(cfg.get("simulation", {}))
+    if bounds_path is None:  # a bounds file's centre was checked when it was read
+        _check_model_mass(nominal, model, traj, duration if duration is not None else sim.get("duration"), None,
+                          model_cfg.get("theta"))
     if rate is not None:
         sim["rate"] = rate
     if sim.get("rate") in (0, 0.0):
@@ -539,6 +548,21 @@ def _check_bounds_robot(bf: dict, robot: str | None, urdf) -> None:
     if named != ours:
         raise ConfigError(f"bounds file {bf['source']} was identified on robot '{named}', the run's robot is "
                           f"'{ours}': identify '{ours}' (rc3r identify --robot {ours}) or run --robot {named}")
+
+
+def _check_model_mass(nominal, model: dict, traj, duration, bounds_path, theta_cfg) -> None:
+    """Refuse (one line) a model theta from a bounds file or a config list whose mass matrix is not positive
+    definite along the reference (:func:`rc3r.uncertainty.ellipsoid.require_positive_mass_matrix`)."""
+    if bounds_path is not None:
+        source = f"bounds file {bounds_path}"
+    elif isinstance(theta_cfg, list):
+        source = "model theta of the config"
+    else:
+        return
+    from .uncertainty.ellipsoid import require_positive_mass_matrix
+
+    require_positive_mass_matrix(nominal, model["theta0"], traj, float(duration if duration is not None else 10.0),
+                                 source)
 
 
 def _nominal(robot: str | None, urdf=None, lock: dict | None = None):

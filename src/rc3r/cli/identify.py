@@ -72,7 +72,11 @@ def add_parsers(sub, positive, lock, urdf=str) -> None:
     i.add_argument("--coulomb-velocity", type=positive(float, allow_zero=True), metavar="RAD_S",
                    help="smoothing velocity v_s of the Coulomb law f_c tanh(qd / v_s), 0 for sign(qd) "
                         "(default: chosen by cross-validation among 0, 0.003, 0.01, 0.03, 0.1)")
-    i.add_argument("--no-consistency", action="store_true", help="skip the physical-consistency SDP (cvxpy)")
+    i.add_argument("--no-consistency", action="store_true",
+                   help="skip the consistency SDP of the unconstrained estimate (cvxpy)")
+    i.add_argument("--no-physical", action="store_true",
+                   help="skip the physically consistent fit: bounds.toml then carries the unconstrained least-squares "
+                        "estimate (which may not be a rigid body)")
     i.add_argument("--out", required=True, help="output directory (identified.json, bounds.toml, figures)")
     i.add_argument("--force", action="store_true", help="replace an earlier result in --out")
 
@@ -133,20 +137,24 @@ def cmd_identify(args) -> int:
         res = identify(robot, log, friction=args.friction, cutoff_hz=args.filter, test_fraction=args.test_fraction,
                        confidence=args.confidence, velocities=args.velocities,
                        consistency=not args.no_consistency, covariance=args.covariance, seed=args.seed,
-                       weighting=args.weighting, coulomb_velocity=args.coulomb_velocity)
+                       weighting=args.weighting, coulomb_velocity=args.coulomb_velocity,
+                       physical=not args.no_physical)
     prov = provenance(seed=args.seed)
     data = res.to_dict() | {"provenance": prov}
     lock = dict(args.lock) if args.lock else {}
+    bounds = res.bounds()
     ident = {"log": str(Path(args.log).resolve()), "log_sha256": log.sha256, "cutoff_hz": res.filter["cutoff_hz"],
              "filter_chosen": res.filter["chosen"], "sigma": res.sigma.tolist(), "friction": list(res.friction_kinds),
-             "covariance": args.covariance, "quantile": res.ellipsoid["quantile"],
+             "covariance": args.covariance, "quantile": bounds["quantile"],
              "velocities": res.filter["velocities"], "weighting": res.filter["weighting"],
-             "coulomb_law": res.friction_law["coulomb"], "coulomb_velocity": res.friction_law["coulomb_velocity"]}
+             "coulomb_law": res.friction_law["coulomb"], "coulomb_velocity": res.friction_law["coulomb_velocity"],
+             "estimate": "physically consistent (log-Cholesky, log-det prior)" if "physical" in bounds else
+             "unconstrained least squares (--no-physical)"}
     flat_prov = {"rc3r": prov["versions"]["rc3r"], "created": prov["created"], "command": " ".join(prov["command"]),
                  "git_commit": (prov.get("git") or {}).get("commit"), "git_dirty": (prov.get("git") or {}).get("dirty")}
     with output_dir(out, own=OWN_ENTRIES) as tmp:
         atomic_write_json(tmp / "identified.json", data)
-        write_bounds(tmp / "bounds.toml", res.bounds(), robot, robot_name=args.robot,
+        write_bounds(tmp / "bounds.toml", bounds, robot, robot_name=args.robot,
                      urdf=None if args.urdf is None else str(Path(args.urdf).resolve()), lock=lock, seed=args.seed,
                      identification=ident, provenance=flat_prov)
         atomic_savefig(torque_figure(res), tmp / "torque.png", dpi=110)
@@ -179,21 +187,33 @@ def cmd_identify(args) -> int:
           f"{res.regressor['rows']} rows, condition number {res.regressor['condition_number']:.3g}")
     print(f"held-out rms [N m]: {_fmt(v['rms'])} (logged), {_fmt(v['rms_filtered'])} (low-passed), "
           f"{_fmt(v['rms_nominal'])} (the robot's own coefficients)")
+    ph = res.physical
+    if ph is not None:
+        pv = ph["validation"]
+        print(f"physically consistent fit (gamma {ph['gamma']:g}): held-out rms {_fmt(pv['rms'])} (logged), "
+              f"{_fmt(pv['rms_filtered'])} (low-passed); smallest pseudo-inertia eigenvalue "
+              f"{min(ph['min_pseudo_inertia_eigenvalues']):.3g}")
+        print(f"link masses [kg]: {_fmt(ph['masses'])} (the URDF's {_fmt(ph['urdf_masses'])})")
+        di = ph["draws_inside"]
+        print(f"physical draws: {100 * di['share']:.1f} % of {di['draws']} Gaussian log-Cholesky draws inside the "
+              f"ellipsoid; of {di['realise_draws']} uniform draws, {100 * di['realised']:.0f} % realised exactly by "
+              f"physical links, {100 * di['plants_inside']:.0f} % give a physical plant inside (seed {di['seed']})")
     print(f"inside the {100 * v['band_confidence']:g} % prediction band: {100 * v['inside_band']:.1f} % of "
           f"{v['samples']} held-out samples x {robot.n} joints")
     c = res.consistency
     if c is None:
-        print("physical consistency: not checked (--no-consistency)")
+        print("consistency SDP of the unconstrained estimate: not run (--no-consistency)")
     elif not c.get("checked"):
-        print(f"physical consistency: not checked ({c['reason']})")
+        print(f"consistency SDP of the unconstrained estimate: not run ({c['reason']})")
     else:
-        print("physical consistency: " + ("the estimate is realised by consistent standard parameters"
+        print("consistency SDP of the unconstrained estimate: " + ("it is realised by consistent standard parameters"
                                           if c["consistent"] else
                                           f"the nearest consistent coefficients are {c['mahalanobis']:.3g} standard "
                                           f"deviations away ({'inside' if c['within_ellipsoid'] else 'outside'} "
                                           "the ellipsoid)"))
-    print(f"bounds at {100 * res.ellipsoid['confidence']:g} %: rho = {res.ellipsoid['rho']:.4g}, "
-          f"max rho_i = {max(res.ellipsoid['rho_i']):.4g} -> {out}/bounds.toml, identified.json, torque.png, "
+    which = "physically consistent" if "physical" in bounds else "unconstrained"
+    print(f"bounds of the {which} estimate at {100 * bounds['confidence']:g} %: rho = {bounds['rho']:.4g}, "
+          f"max rho_i = {max(bounds['rho_i']):.4g} -> {out}/bounds.toml, identified.json, torque.png, "
           "residuals.png")
     return EXIT["ok"]
 

@@ -16,6 +16,11 @@ Written by ``rc3r identify`` (:func:`write_bounds`), read by :func:`load_bounds`
 ``P``                  (p, p) the ellipsoid ``(theta - theta0)^T P (theta - theta0) <= 1``
 ``rho``                radius of the smallest ball about theta0 containing it (eq. 6's bound)
 ``rho_i``              (p,) half-widths of the smallest box containing it (eq. 7's bounds)
+``[physical]``         optional: the link parameters of the centre (the physically consistent
+                       estimate, :mod:`rc3r.identify.physical`): ``standard_parameters`` (10 nb,),
+                       ``log_cholesky`` (10 nb,) and ``log_cholesky_cov`` (10 nb, 10 nb), the
+                       Laplace covariance plants are drawn with; ``gamma``, ``masses``,
+                       ``draws_inside`` (for the record)
 ``[identification]``   log, digest, filter, noise (for the record)
 ``[provenance]``       versions, git commit, command line, time
 =====================  ===============================================================
@@ -96,6 +101,9 @@ def write_bounds(path, bounds: dict, robot, *, robot_name: str | None = None, ur
             "rho_i": np.asarray(bounds["rho_i"], float), "P": np.asarray(bounds["P"], float)}
     if lock:
         data["lock"] = {str(k): float(v) for k, v in lock.items()}
+    if bounds.get("physical") is not None:
+        data["physical"] = {k: (np.asarray(v, float) if isinstance(v, (list, tuple, np.ndarray)) else v)
+                            for k, v in bounds["physical"].items()}
     if identification:
         data["identification"] = identification
     if provenance:
@@ -118,6 +126,35 @@ def _numbers(path, key, value, shape) -> np.ndarray:
     return arr
 
 
+def _physical(path, table, robot):
+    """The validated ``[physical]`` table (ndarrays) or None."""
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise ConfigError(f"bounds file {path}: physical must be a table")
+    for key in ("standard_parameters", "log_cholesky", "log_cholesky_cov"):
+        if key not in table:
+            raise ConfigError(f"bounds file {path}: [physical] lacks {key!r}")
+    k = len(table["log_cholesky"]) if isinstance(table["log_cholesky"], list) else -1
+    if k <= 0 or k % 10:
+        raise ConfigError(f"bounds file {path}: [physical] log_cholesky must be 10 numbers per link")
+    if robot is not None and k != len(robot.standard_parameter_names):
+        raise ParameterError(f"bounds file {path}: [physical] has {k // 10} links, robot '{robot.label}' has "
+                             f"{len(robot.standard_parameter_names) // 10}")
+    out = dict(table)
+    out["log_cholesky"] = _numbers(path, "physical.log_cholesky", table["log_cholesky"], (k,))
+    out["standard_parameters"] = _numbers(path, "physical.standard_parameters", table["standard_parameters"], (k,))
+    C = _numbers(path, "physical.log_cholesky_cov", table["log_cholesky_cov"], (k, k))
+    if not np.allclose(C, C.T, rtol=1e-9, atol=1e-12 * max(np.abs(C).max(), 1e-300)):
+        raise ParameterError(f"bounds file {path}: physical.log_cholesky_cov is not symmetric")
+    if np.linalg.eigvalsh(0.5 * (C + C.T))[0] < -1e-9 * max(np.abs(C).max(), 1e-300):
+        raise ParameterError(f"bounds file {path}: physical.log_cholesky_cov is not positive semidefinite")
+    out["log_cholesky_cov"] = C
+    for v in (out["log_cholesky"], out["standard_parameters"], C):
+        v.flags.writeable = False
+    return out
+
+
 def load_bounds(path, robot=None) -> dict:
     """Read and validate a ``bounds.toml`` (module docstring); optionally check it fits ``robot``.
 
@@ -127,7 +164,8 @@ def load_bounds(path, robot=None) -> dict:
         ``theta0`` (p,), ``rho`` (float), ``rho_i`` (p,), ``P`` (p, p) (ndarrays, read-only),
         ``n``, ``p``, ``robot`` (str or None), ``urdf`` (str or None), ``lock`` (dict),
         ``coefficient_names`` (tuple), ``confidence``, ``quantile``, ``seed``, ``format``,
-        ``source`` (the path), ``identification``, ``provenance`` (dicts, possibly empty).
+        ``source`` (the path), ``identification``, ``provenance`` (dicts, possibly empty),
+        ``physical`` (the validated ``[physical]`` table, or None).
     """
     from ..io import read_toml
 
@@ -135,7 +173,7 @@ def load_bounds(path, robot=None) -> dict:
     if data.get("format") != FORMAT:
         raise ConfigError(f"bounds file {path}: format must be {FORMAT!r}, got {data.get('format')!r}")
     known = {"format", "robot", "urdf", "lock", "n", "p", "coefficient_names", "confidence", "quantile", "seed",
-             "theta0", "rho", "rho_i", "P", "identification", "provenance"}
+             "theta0", "rho", "rho_i", "P", "identification", "provenance", "physical"}
     unknown = sorted(set(data) - known)
     if unknown:
         raise ConfigError(f"bounds file {path}: unknown key(s) {', '.join(unknown)}")
@@ -188,7 +226,8 @@ def load_bounds(path, robot=None) -> dict:
             k = next(i for i, (a, b) in enumerate(zip(robot.coefficient_names, names)) if a != b)
             raise ParameterError(f"bounds file {path}: coefficient {k + 1} is {names[k]!r}, robot "
                                  f"'{robot.label}' calls it {robot.coefficient_names[k]!r} (another arm?)")
-    out = {"theta0": theta0, "rho": float(rho), "rho_i": rho_i, "P": P}
+    physical = _physical(path, data.get("physical"), robot)
+    out = {"theta0": theta0, "rho": float(rho), "rho_i": rho_i, "P": P, "physical": physical}
     for arr in (theta0, rho_i, P):
         arr.flags.writeable = False
     seed = data.get("seed", 0)

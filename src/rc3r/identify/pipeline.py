@@ -19,10 +19,14 @@ r"""The identification pipeline: from a log to theta, friction, covariance, vali
    (``rms_filtered``), the fraction of logged torques inside the prediction band at the
    confidence level, and the RMS of the robot's own (URDF) coefficients without friction
    (``rms_nominal``) for comparison;
-6. physical consistency (:mod:`rc3r.identify.consistency`), if asked.
+6. the **physically consistent estimate** (:mod:`rc3r.identify.physical`, default): least squares
+   in the log-Cholesky chart of every link's pseudo-inertia, pulled toward the URDF's inertias by
+   the log-det divergence, its Laplace covariance and ellipsoid (what ``bounds.toml`` carries), and
+   its held-out validation like the unconstrained estimate's;
+7. the consistency SDP of the unconstrained estimate (:mod:`rc3r.identify.consistency`, cvxpy), if asked.
 
 Evaluating another coefficient vector exactly like the fit's: :meth:`Identification.held_out_rms`
-(``x`` of the same unknowns, e.g. a physically consistent estimate) uses the stored held-out
+(``x`` of the same unknowns, e.g. the physically consistent estimate) uses the stored held-out
 regressor ``held_out["rows"]`` (N, n, m: the rows of step 5 at the held-out logged stamps) and
 the logged torques ``held_out["tau"]`` (N, n); ``held_out_rms(res.x) == validation["rms"]``.
 """
@@ -65,6 +69,8 @@ class Identification:
     held_out: dict = field(repr=False)
     selection: dict | None = None
     friction_law: dict = field(default_factory=dict)
+    physical: dict | None = None
+    physical_fit: object = field(default=None, repr=False)
 
     def held_out_rms(self, x=None) -> np.ndarray:
         """Held-out RMS per joint (n,) [N m] of coefficients ``x`` (m,) against the logged torques.
@@ -93,9 +99,33 @@ class Identification:
         n = self.sigma.size
         return {k: self.x[self.p + i * n: self.p + (i + 1) * n] for i, k in enumerate(self.friction_kinds)}
 
-    def bounds(self) -> dict:
-        """``theta0, rho, rho_i, P, confidence, chi2`` of the confidence ellipsoid."""
-        return {"theta0": self.theta, **self.ellipsoid}
+    def held_out_rms(self, x) -> np.ndarray:
+        """Held-out RMS per joint (n,) [N m] of the logged torques minus ``Phi x`` for any unknowns ``x`` (m,).
+
+        ``Phi`` is the unfiltered regressor at the held-out stamps and prediction states, as for
+        ``validation.rms`` (which is ``held_out_rms(self.x)``).
+        """
+        R = self.held_out["rows"]
+        return np.sqrt(np.mean((self.held_out["tau"] - R @ np.asarray(x, dtype=float)) ** 2, axis=0))
+
+    def bounds(self, which: str = "auto") -> dict:
+        """``theta0, rho, rho_i, P, confidence, chi2`` of the confidence ellipsoid (and ``physical``).
+
+        ``which``: ``"physical"`` the consistent estimate's (centre ``T pi*``, Laplace covariance; its
+        link parameters in ``physical``: ``standard_parameters``, ``log_cholesky``, ``log_cholesky_cov``),
+        ``"unconstrained"`` the least-squares estimate's, ``"auto"`` the first when it was fitted.
+        """
+        if which == "unconstrained" or (which == "auto" and self.physical_fit is None):
+            return {"theta0": self.theta, **self.ellipsoid}
+        if self.physical_fit is None:
+            raise ConfigError("no physically consistent fit (identify(..., physical=False))")
+        f = self.physical_fit
+        ph = self.physical
+        return {"theta0": f.theta, **ph["_ellipsoid"],
+                "physical": {"standard_parameters": f.standard, "log_cholesky": f.eta,
+                             "log_cholesky_cov": f.cov_eta, "gamma": f.gamma,
+                             "draws_inside": ph["draws_inside"]["share"],
+                             "masses": f.masses}}
 
     def to_dict(self) -> dict:
         """JSON-ready: every field of ``identified.json`` except provenance."""
@@ -124,6 +154,8 @@ class Identification:
             "consistency": self.consistency,
             "friction_law": self.friction_law,
             "selection": self.selection,
+            "physical": None if self.physical is None else
+            {k: v for k, v in self.physical.items() if not k.startswith("_")},
         }
 
 
@@ -144,7 +176,8 @@ def _filtered_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
 def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: float | None = None,
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
              consistency: bool = True, covariance: str = "white", seed: int = 0, weighting: str = "auto",
-             coulomb_velocity: float | None = None, folds: int = _sel.FOLDS) -> Identification:
+             coulomb_velocity: float | None = None, folds: int = _sel.FOLDS,
+             physical: bool = True) -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
 
     Parameters
@@ -172,7 +205,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         ``"robust"``: the smallest covariance that dominates it and the spectral (Whittle) one
         (:func:`~rc3r.identify.estimate.dominating`), for logs with coloured low-frequency residuals.
     seed : int
-        Seed of the random states of the consistency check's standard-parameter map.
+        Seed of the random states of the standard-parameter map (robots without Pinocchio base
+        parameters) and of the draws that measure the physical ellipsoid's share of physical draws.
     weighting : str
         ``"auto"`` (cross-validated), ``"ordinary"`` or ``"per-joint"``.
     coulomb_velocity : float, optional
@@ -180,6 +214,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         :data:`~rc3r.identify.selection.COULOMB_VELOCITIES`.
     folds : int
         Blocks of the cross-validation.
+    physical : bool
+        Fit the physically consistent estimate (:func:`rc3r.identify.physical.fit_physical`; SciPy only).
     """
     kinds = tuple(k for k in FRICTION_KINDS if k in tuple(friction))
     if log.n != robot.n:
@@ -294,6 +330,94 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
 
         cons = check_consistency(robot, fit.x[:p], fit.cov[:p, :p], ell["chi2"], seed=seed)
     held = {"t": log.t[te_idx], "tau": tau_te, "pred": pred, "band": half, "covariances": parts, "rows": R_te}
+    phys = pfit = None
+    if physical:
+        from .physical import RULE_STAMPS
+
+        rule = tr_idx[np.unique(np.linspace(0, tr_idx.size - 1, min(tr_idx.size, RULE_STAMPS)).astype(int))]
+        phys, pfit = _physical(robot, fit, kinds, _raw_rows(robot, prep, log.t[rule], kinds, True, v_s), log.tau[rule],
+                               A[test], prep.tau[test], R_te, tau_te, confidence, max(nu, 1.5), sigma_raw, seed)
     return Identification(robot.describe() | {"coefficient_names": list(robot.coefficient_names)},
                           tuple(robot.coefficient_names), kinds, fit.x, fit.cov, p, fit.sigma, sigma_raw, ell,
-                          filt, validation, reg, log.describe(), cons, held, sel, law)
+                          filt, validation, reg, log.describe(), cons, held, sel, law, phys, pfit)
+
+
+def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confidence, dof, sigma_raw, seed):
+    """The consistent fit, its ellipsoid, held-out validation and share of physical draws inside (JSON-ready)."""
+    import time
+
+    from .consistency import standard_map
+    from .physical import (GAMMAS, INSIDE_DRAWS, MAHALANOBIS_SLACK, PRIOR_FLOOR, REALISE_DRAWS, covariance_factor,
+                           draws_inside, fit_physical, realise_log_cholesky, standard_of)
+
+    t0 = time.perf_counter()
+    pf = fit_physical(robot, fit.x, fit.cov, R_tr, tau_tr, kinds, seed=seed)
+    elapsed = time.perf_counter() - t0
+    p = robot.p
+    # the bounds' ellipsoid: centred at the consistent estimate, shaped by the data's covariance (the
+    # unconstrained estimate's): the prior moves the centre into the consistent set, it does not shrink
+    # the uncertainty (a URDF's inertias can be wrong: docs/identification.md)
+    ell = _est.ellipsoid(fit.cov[:p, :p], confidence, dof=dof)
+    T = standard_map(robot, seed)
+    share = draws_inside(pf, T, ell["P"], np.random.default_rng(seed))
+    # what a campaign draws (rc3r.uncertainty.ellipsoid.draw_from_ellipsoid): theta uniform in the ellipsoid,
+    # realised in the log-Cholesky chart from the consistent estimate's parameters
+    from ..uncertainty.ellipsoid import draw_theta
+
+    rng = np.random.default_rng(seed)
+    S = covariance_factor(pf.cov_eta)
+    t1 = time.perf_counter()
+    realised = reached = 0
+    for _ in range(REALISE_DRAWS):
+        th = draw_theta(pf.theta, ell["P"], rng)
+        eta = realise_log_cholesky(T, th, pf.eta, S, best=True)
+        dd = T @ standard_of(eta) - pf.theta
+        realised += bool(np.linalg.norm(T @ standard_of(eta) - th) <= 1e-10 * np.linalg.norm(th))
+        reached += bool(dd @ ell["P"] @ dd <= 1.0 + 1e-9)
+    t_realise = (time.perf_counter() - t1) / REALISE_DRAWS
+    pred = R_te @ pf.x
+    half = _est.Fit(pf.x, pf.cov, fit.sigma, fit.rows, fit.cond, fit.weights).band(R_te, sigma_raw, confidence)
+    nb = pf.standard.size // 10
+    from ..robots.base_parameters import STD_KEYS
+    from .consistency import model_standard_parameters
+
+    pi0 = model_standard_parameters(robot.model)
+    links = [{k: float(v) for k, v in zip(STD_KEYS, pf.standard[10 * b:10 * b + 10])} for b in range(nb)]
+    se = np.sqrt(np.diag(pf.cov))
+    n = robot.n
+    out = {
+        "theta": pf.theta.tolist(), "theta_std": se[:p].tolist(),
+        "friction": {k: pf.x[p + i * n:p + (i + 1) * n].tolist() for i, k in enumerate(kinds)},
+        "friction_std": {k: se[p + i * n:p + (i + 1) * n].tolist() for i, k in enumerate(kinds)},
+        "links": links, "log_cholesky": pf.eta.tolist(),
+        "masses": pf.masses.tolist(), "urdf_masses": pi0[0::10].tolist(),
+        "mass_ratio": (pf.masses / np.maximum(pi0[0::10], 1e-300)).tolist(),
+        "min_pseudo_inertia_eigenvalues": pf.info["min_eigenvalues"],
+        "divergence_per_link": pf.info["divergence_per_body"],
+        "gamma": pf.gamma,
+        "gamma_rule": f"of {', '.join(f'{g:g}' for g in GAMMAS)} (each fitted, warm-started), the largest whose "
+                      "Mahalanobis distance to the unconstrained estimate exceeds the smallest gamma's by at most "
+                      f"{MAHALANOBIS_SLACK:g}",
+        "gamma_path": pf.path, "prior_repaired_links": pf.info["repaired"], "prior_floor": PRIOR_FLOOR,
+        "validation": {"rms": np.sqrt(np.mean((tau_te - pred) ** 2, axis=0)).tolist(),
+                       "rms_filtered": np.sqrt(np.mean((y_te - A_te @ pf.x) ** 2, axis=0)).tolist(),
+                       "rms_train": np.sqrt(np.mean((tau_tr - R_tr @ pf.x) ** 2, axis=0)).tolist(),
+                       "inside_band": float(np.mean(np.abs(tau_te - pred) <= half))},
+        "ellipsoid": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in ell.items() if k != "P"},
+        "draws_inside": {"share": share, "draws": INSIDE_DRAWS, "seed": int(seed),
+                         "realised": realised / REALISE_DRAWS, "realise_draws": REALISE_DRAWS,
+                         "plants_inside": reached / REALISE_DRAWS,
+                         "seconds_per_realised_draw": t_realise,
+                         "meaning": "share: of log-Cholesky draws eta ~ N(eta*, Cov(eta)) (all physical), those whose "
+                                    "theta lies inside this ellipsoid; realised: of theta uniform in the ellipsoid, "
+                                    "those realised by physical link parameters (log-Cholesky Gauss-Newton from the "
+                                    "consistent estimate's), as run, montecarlo and design draw plants; "
+                                    "plants_inside: of those draws, the ones whose realised (or nearest reached) "
+                                    "physical coefficients lie in the ellipsoid (usable plants)"},
+        "covariance": pf.cov.tolist(), "seconds": elapsed,
+        "method": "min (x - x_ls)^T Cov^-1 (x - x_ls) + gamma sum_k d(J_k || J0_k) over the log-Cholesky parameters "
+                  "of every link (scipy least_squares); d the log-det divergence from the URDF's pseudo-inertia; "
+                  "covariance by the Laplace approximation (docs/identification.md)",
+        "_ellipsoid": ell,
+    }
+    return out, pf

@@ -30,6 +30,21 @@ robot cannot be simulated (:meth:`~rc3r.robots.base.Robot.require_simulable`), i
 same seeded stream, at most :data:`MAX_DRAWS` times: ``random:<seed>`` is uniform on the
 realisable part of :math:`\mathcal E`.
 
+**Physical draws** (an identification's ``[physical]`` table: the consistent estimate's link parameters
+and the Laplace covariance of their log-Cholesky parameters, :mod:`rc3r.identify.physical`). The centre
+is the consistent estimate's own robot (``theta_0 = T pi*`` exactly); a draw ``theta`` is realised in the
+**log-Cholesky chart** of the pseudo-inertias (Rucker, Wensing 2022) from the centre's parameters, by
+minimum-norm Gauss-Newton steps in the Laplace metric
+(:func:`rc3r.identify.physical.realise_log_cholesky`): every iterate, hence every plant, is a real rigid
+body, and its coefficients are ``T pi`` of its link parameters. A draw outside the consistent set is
+replaced by the nearest physical coefficients the steps reach, if they lie in the ellipsoid (else it
+is redrawn as above): plants are uniform on the realisable part of the ellipsoid, plus points of the
+consistent set's boundary region for the draws beyond it.
+
+Before a run, a model ``theta`` (a bounds file's centre, a config's list) must give a positive definite
+mass matrix along the run's reference (:func:`require_positive_mass_matrix`): else the run is refused
+in one line naming the direction and the smallest eigenvalue.
+
 This is not the physical-consistency projection of :func:`rc3r.identify.consistency.check_consistency`
 (a semidefinite program, cvxpy): that one projects an estimate; this one draws plants, and needs no solver.
 """
@@ -39,8 +54,11 @@ import numpy as np
 
 from ..errors import ConfigError, ParameterError
 
-__all__ = ["MAX_DRAWS", "ELLIPSOID_SPECS", "ellipsoid_factor", "draw_theta", "realise_theta", "draw_from_ellipsoid",
-           "lightest_theta"]
+__all__ = ["MAX_DRAWS", "ELLIPSOID_SPECS", "MASS_SAMPLES", "ellipsoid_factor", "draw_theta", "realise_theta",
+           "draw_from_ellipsoid", "lightest_theta", "mass_matrix_of", "require_positive_mass_matrix"]
+
+#: Reference samples at which a model's mass matrix is checked positive definite.
+MASS_SAMPLES = 200
 
 #: Redraws of ``random:<seed>`` / ``boundary:<seed>`` before a non-simulable ellipsoid is refused.
 MAX_DRAWS = 200
@@ -196,7 +214,25 @@ def realise_theta(robot, theta, label: str | None = None, iterations: int = 30):
     return robot.with_standard_parameters(pi_of(xi), label or "ellipsoid")
 
 
-def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bounds"):
+def _physical_chart(robot, theta0, physical, source):
+    """``(T, eta*, S, pi*)`` of a bounds file's ``[physical]`` table, or None when the robot's standard
+    parameters are not Pinocchio's (the 3R)."""
+    if physical is None or tuple(robot.standard_parameter_names[:10]) != _PIN_ORDER:
+        return None
+    from ..identify.consistency import standard_map
+    from ..identify.physical import covariance_factor, standard_of
+
+    T = standard_map(robot)
+    eta = np.asarray(physical["log_cholesky"], dtype=float)
+    pi = standard_of(eta)
+    theta0 = np.asarray(theta0, dtype=float)
+    if np.linalg.norm(T @ pi - theta0) > 1e-8 * max(np.linalg.norm(theta0), 1e-300):
+        raise ParameterError(f"{source}: its link parameters [physical] do not give its theta0 "
+                             f"(relative misfit {np.linalg.norm(T @ pi - theta0) / np.linalg.norm(theta0):.2g})")
+    return T, eta, covariance_factor(np.asarray(physical["log_cholesky_cov"], dtype=float)), pi
+
+
+def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bounds", physical: dict | None = None):
     """A plant of the ellipsoid: ``centre``, ``random:<seed>`` or ``boundary:<seed>`` (module docstring).
 
     Parameters
@@ -209,6 +245,9 @@ def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bound
         The plant spec.
     source : str
         Named in the error messages (e.g. the bounds file).
+    physical : dict, optional
+        A bounds file's ``[physical]`` table (``log_cholesky``, ``log_cholesky_cov``): draws are realised in
+        the log-Cholesky chart from the consistent estimate (module docstring).
 
     Returns
     -------
@@ -235,6 +274,9 @@ def draw_from_ellipsoid(robot, theta0, P, spec: str, *, source: str = "the bound
     """
     kind, _, arg = str(spec).strip().partition(":")
     kind = kind.lower()
+    chart = _physical_chart(robot, theta0, physical, source)
+    if chart is not None:
+        return _draw_physical(robot, theta0, P, spec, kind, arg, chart, source)
     if kind in ("centre", "center") and not arg:
         try:
             plant = realise_theta(robot, theta0, label="centre")
@@ -293,3 +335,73 @@ def lightest_theta(robot, theta0, P, arg: str, spec: str = "") -> np.ndarray:
     theta0 = np.asarray(theta0, dtype=float)
     return theta0 if norm == 0.0 else theta0 - s * Pinv_g / norm
 
+
+def _draw_physical(robot, theta0, P, spec, kind, arg, chart, source):
+    """:func:`draw_from_ellipsoid` with link parameters realised in the log-Cholesky chart (module docstring)."""
+    from ..identify.physical import realise_log_cholesky, standard_of
+
+    T, eta0, S, pi0 = chart
+    if kind in ("centre", "center") and not arg:
+        plant = robot.with_standard_parameters(pi0, "centre")
+        try:
+            plant.require_simulable()
+        except ParameterError as exc:
+            raise ParameterError(f"the centre theta_0 of {source} is not simulable: {exc}") from None
+        return plant
+    if kind not in ("random", "boundary"):
+        raise ConfigError(f"bad plant {spec!r} with bounds from {source}: expected nominal, {ELLIPSOID_SPECS}")
+    from .box import spec_seed
+
+    rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad plant"))
+    P = np.asarray(P, dtype=float)
+    for _ in range(MAX_DRAWS):
+        theta = draw_theta(theta0, P, rng, boundary=kind == "boundary")
+        eta = realise_log_cholesky(T, theta, eta0, S, best=True)
+        pi = standard_of(eta)
+        d = T @ pi - np.asarray(theta0, dtype=float)
+        if not d @ P @ d <= 1.0 + 1e-9:  # the nearest physical coefficients reached must lie in the ellipsoid
+            continue
+        try:
+            plant = robot.with_standard_parameters(pi, spec)
+            plant.require_simulable()
+            return plant
+        except ParameterError:
+            continue
+    raise ParameterError(f"plant {spec!r}: no physical link parameters realise any of {MAX_DRAWS} draws from the "
+                         f"ellipsoid of {source}")
+
+
+def mass_matrix_of(robot, theta, Q) -> np.ndarray:
+    """``M(q)`` (K, n, n) of coefficients ``theta`` (p,) at positions ``Q`` (K, n): :class:`~rc3r.uncertainty.
+    inertia.ThetaModel`'s (column i is ``Y(q, 0, 0, e_i) theta - Y(q, 0, 0, 0) theta``), symmetrised."""
+    from .inertia import ThetaModel
+
+    model = ThetaModel(robot, theta)
+    return np.stack([model.mass_matrix(q) for q in np.atleast_2d(np.asarray(Q, dtype=float))])
+
+
+def require_positive_mass_matrix(robot, theta, trajectory, duration: float, source: str) -> float:
+    """ParameterError (one line) unless ``M(q)`` of ``theta`` is positive definite at :data:`MASS_SAMPLES`
+    points of ``trajectory`` over ``[0, duration]``; returns the smallest eigenvalue.
+
+    The message names the smallest eigenvalue, the time and the direction: ``joint j`` when the
+    eigenvector is mostly one joint (|v_j| >= 0.9), else its largest components.
+    """
+    t = np.linspace(0.0, float(duration), MASS_SAMPLES)
+    Q = np.asarray(trajectory.evaluate(t)[0], dtype=float)
+    lam, V = np.linalg.eigh(mass_matrix_of(robot, theta, Q))
+    k = int(np.argmin(lam[:, 0]))
+    low = float(lam[k, 0])
+    if not low > 0.0:
+        v = V[k][:, 0]
+        v = v * np.sign(v[np.argmax(np.abs(v))])
+        j = int(np.argmax(np.abs(v)))
+        if abs(v[j]) >= 0.9:
+            where = f"joint {j + 1}"
+        else:
+            top = np.argsort(-np.abs(v))[:3]
+            where = "eigenvector " + " ".join(f"{v[i]:+.2f} q{i + 1}" for i in top)
+        raise ParameterError(f"{source}: its mass matrix is not positive definite along the reference: smallest "
+                             f"eigenvalue {low:.3g} along {where} at t = {t[k]:.3g} s (not a rigid body; "
+                             "identify with the physically consistent fit)")
+    return low
