@@ -233,7 +233,8 @@ def test_payload_plants_with_urdf_uncertainty_stay_in_its_box_and_the_search_goe
     searched corner around the light end ('lower+corner:...') is simulable, harder than the light end
     itself, and its figure is exact on the plant build_run makes of its spec."""
     from rc3r.design.rule import fast_design, spectrum
-    from rc3r.design.verify import _Hardest, _resolve, controller_model, design_config
+    from rc3r.design.verify import _resolve, controller_model, design_config
+    from rc3r.design.worst import Hardest
     from rc3r.design.worst import plant_gain
     from rc3r.uncertainty.payload import payload_parameters
 
@@ -253,7 +254,7 @@ def test_payload_plants_with_urdf_uncertainty_stay_in_its_box_and_the_search_goe
             np.testing.assert_allclose(arm, urdf, atol=1e-9)
     sp = spectrum(controller_model(spec), spec.trajectory, 1.0)
     d = fast_design(sp, 1000.0, rho=spec.model["rho"], rho_i=rho_i)
-    hard = _Hardest(cfg, spec, sp, 1000.0, 0)
+    hard = Hardest(cfg, spec, sp, 1000.0, 0)
     sl = {k: v for k, v in d.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
     found = hard.plants(sl, rho=spec.model["rho"], eps=d.eps)
     top = found[0]

@@ -29,8 +29,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "rc3r"
 #: never one above. A module belongs to the layer of the longest prefix that names it. Written
 #: once, here; docs/architecture.md ("Layers") reads the same.
 LAYERS = (
-    # foundations: errors, shared orders and names, file formats, the numba cache, compiled trigonometry
-    ("rc3r.errors", "rc3r.conventions", "rc3r.io", "rc3r._numba_cache", "rc3r._trig"),
+    # foundations: errors, shared orders and names, URDF files by name, file formats, the numba cache, compiled trigonometry
+    ("rc3r.errors", "rc3r.conventions", "rc3r.urdf_names", "rc3r.io", "rc3r._numba_cache", "rc3r._trig"),
     # plain numerics every layer above may use
     ("rc3r.trajectory", "rc3r.plotting"),
     # identification from logs knows no robot class: it works on regressors and arrays
@@ -46,7 +46,7 @@ LAYERS = (
     # the sampled-data rule: a calculation on a law and a model that study asks for default gains
     ("rc3r.design.rule",),
     # runs as data and the model checks
-    ("rc3r.study", "rc3r.verify"),
+    ("rc3r.study", "rc3r.plant_sets", "rc3r.verify"),
     # many runs; a run's controller as C
     ("rc3r.campaign", "rc3r.export"),
     # rc3r design: the rule verified over the bounds on the campaign runner

@@ -31,7 +31,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
 ``rc3r.robots.pinocchio_supply``       a chain's kernel supply of the compiled engine (Y^T r, Y theta in O(n))
-``rc3r.robots.urdf_names``            URDF files by name: example-robot-data's directory, ``erd:`` names, --lock advice
+``rc3r.urdf_names``                   URDF files by name: example-robot-data's directory, ``erd:`` names, --lock advice
 ``rc3r.robots.generated``              generated C kernels of any arm (CasADi SX -> C, cached on disk)
 ``rc3r.robots.generated_chain``        what is generated (``FUNCTIONS``) and from what (a chain's constants)
 ``rc3r.robots.generated_sym``          their symbolic recursions and the C batch wrapper
@@ -86,6 +86,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.steps``                how a sampled run advances the plant: RK4 sub-steps, implicit periods
 ``rc3r.simulate.export``               a result as a table, CSV, figure, run directory
 ``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
+``rc3r.plant_sets``                    the plants of a run's bounds (payload, box, URDF uncertainty, ellipsoid)
 ``rc3r.export``                        ``rc3r export``: a run's controller as self-contained C99, with a checking harness
 ``rc3r.export.c``                      the C controller: trajectory, law, state, zero-order hold, delay line
 ``rc3r.export.literals``               C99 literals of doubles and arrays (shared by the controller and the chain)
@@ -94,6 +95,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.design``                        ``rc3r design``: gains and eps for a controller rate, verified over the bounds
 ``rc3r.design.rule``                   the sampled-data rule and its fast form (the defaults of sampled runs)
 ``rc3r.design.verify``                 the fast form verified over the bounds at the rate and rate / margin (campaign runner)
+``rc3r.design.worst``                  the worst-plant search: the bounds' plants of largest held-loop gain T lambda_max(M_p^-1 G)
 ``rc3r.design.report``                 ``design.toml``, ``design.md``, the figure
 ``rc3r.campaign``                      many runs: Monte Carlo over the box, eps sweep, rate map
 ``rc3r.campaign.jobs``                 :class:`Job` (one run, picklable) and :func:`run_job` (its row)

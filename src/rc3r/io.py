@@ -324,11 +324,11 @@ def resolve_config_paths(cfg: dict, base) -> dict:
         A copy of ``cfg`` whose relative file names (:data:`PATH_KEYS`) are ``base / name``, unless
         only ``name`` exists from the working directory (configurations written before names were
         relative to their file). Absolute names and ``erd:`` names
-        (:data:`rc3r.robots.urdf_names.ERD_PREFIX`, resolved where the URDF is read) are kept.
+        (:data:`rc3r.urdf_names.ERD_PREFIX`, resolved where the URDF is read) are kept.
     """
     import copy
 
-    from .robots.urdf_names import ERD_PREFIX
+    from .urdf_names import ERD_PREFIX
 
     out = copy.deepcopy(cfg)
     for where, key, value in _path_entries(out):
@@ -354,12 +354,12 @@ def portable_config(cfg: dict, base) -> dict:
     -------
     dict
         A copy of ``cfg`` naming a URDF of example-robot-data ``erd:REL``
-        (:func:`rc3r.robots.urdf_names.erd_name`) and any other file relative to ``base``
+        (:func:`rc3r.urdf_names.erd_name`) and any other file relative to ``base``
         (``os.path.relpath``); :func:`resolve_config_paths` reads them back.
     """
     import copy
 
-    from .robots.urdf_names import ERD_PREFIX, erd_name
+    from .urdf_names import ERD_PREFIX, erd_name
 
     out = copy.deepcopy(cfg)
     base = Path(base).resolve()

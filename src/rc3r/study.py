@@ -26,7 +26,6 @@ and the controller's ``theta_0``, ``rho`` and ``rho_i`` are computed from the
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -37,7 +36,8 @@ from .robots import DEFAULT_ROBOT, load_robot
 from .simulate import SimOptions, SimResult, simulate
 from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
-from .uncertainty import certified_bounds, certified_radius, load_box, paper_bounds, perturb
+from .uncertainty import certified_radius
+from .plant_sets import _Bounds, _bounds_plant, _drawn, _payload, _plant, resolve_box
 
 __all__ = ["RunSpec", "build_run", "design_warning", "execute", "resolve_box", "CONFIG_KEYS"]
 
@@ -153,165 +153,6 @@ def _check_config(cfg: dict, kind_override=None) -> None:
         if key in where and not isinstance(where[key], str):
             raise ConfigError(f"config: {key} must be a string, got {where[key]!r}")
 
-
-def _payload(mass, com):
-    """``((lo, hi), com)`` from a mass interval [kg] and a CoM (3,) [m], or None; validated."""
-    if mass is None:
-        if com is not None:
-            raise ConfigError("a payload CoM was given without a payload mass interval")
-        return None
-    try:
-        lo, hi = (float(x) for x in mass)
-        c = np.zeros(3) if com is None else np.asarray(com, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"payload mass must be [lo, hi] kg and com 3 numbers, got {mass!r}, {com!r}") from None
-    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo <= hi) or c.shape != (3,) or not np.all(np.isfinite(c)):
-        raise ConfigError(f"payload mass must satisfy 0 <= lo <= hi (finite) and com be 3 finite numbers, "
-                          f"got {mass!r}, {com!r}")
-    return (lo, hi), c
-
-
-def resolve_box(nominal, box_path=None):
-    """The box of a run: ``box_path`` (TOML) if given, else the robot's default box."""
-    if box_path is not None:
-        return load_box(box_path, nominal.standard_parameter_names)
-    box = nominal.default_box()
-    if box is None:
-        raise ConfigError(f"robot {getattr(nominal, 'robot_name', nominal.name)!r} has no default box: "
-                          "give --box FILE or --payload LO:HI")
-    return box
-
-
-class _Bounds:
-    """The uncertainty of one run (a box, or a payload) and its bounds, each computed at most once."""
-
-    def __init__(self, nominal, box_path=None, payload=None):
-        self.nominal, self.box_path, self.payload = nominal, box_path, payload
-        self.urdf_uncertainty = 0.0  # [plant] urdf_uncertainty: the plants' arm beyond the bounds
-        self._box = self._paper = self._cert = self._pay = None
-
-    @property
-    def box(self):
-        if self._box is None:
-            self._box = resolve_box(self.nominal, self.box_path)
-        return self._box
-
-    @property
-    def paper(self):
-        if self.payload is not None:
-            return self.pay
-        if self._paper is None:
-            self._paper = paper_bounds(self.nominal, self.box)
-        return self._paper
-
-    @property
-    def cert(self):
-        if self.payload is not None:
-            return self.pay
-        if self._cert is None:
-            self._cert = certified_bounds(self.nominal, self.box)
-        return self._cert
-
-    @property
-    def pay(self):
-        if self._pay is None:
-            from .uncertainty.payload import payload_bounds
-
-            mass, com = self.payload
-            self._pay = payload_bounds(self.nominal, mass, com)
-        return self._pay
-
-    def source(self) -> str:
-        if self.payload is not None:
-            (lo, hi), com = self.payload
-            return f"payload of {lo:g}..{hi:g} kg at {tuple(float(c) for c in com)} m in the last joint frame"
-        return self.box.source
-
-
-def _urdf_box(nominal, bounds: _Bounds):
-    """The URDF's own uncertainty of the plants (``[plant] urdf_uncertainty``), or None."""
-    f = getattr(bounds, "urdf_uncertainty", 0.0)
-    if not f:
-        return None
-    from .uncertainty.box import urdf_box
-
-    return urdf_box(nominal, f)
-
-
-def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
-    if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
-        lock = getattr(nominal, "locked", None)
-        plant = type(nominal).from_urdf(spec, lock=lock) if lock else type(nominal).from_urdf(spec)
-    elif bounds.payload is not None:
-        plant = _payload_plant(nominal, bounds.payload, spec, _urdf_box(nominal, bounds))
-    elif spec == "nominal":
-        plant = nominal
-    else:
-        # random draws are redrawn (same seeded stream) until the robot is physical
-        ubox = _urdf_box(nominal, bounds)
-        if ubox is not None:  # the plants go beyond the box by the URDF's own error (the model keeps the box)
-            from .uncertainty.box import widened
-
-            plant = perturb(nominal, widened(bounds.box, ubox), spec, simulable=spec.startswith("random"))
-        else:
-            plant = perturb(nominal, bounds.box, spec, simulable=spec.startswith("random"))
-    plant.require_simulable()
-    return plant
-
-
-def _drawn(spec) -> bool:
-    """True for a plant spec drawn from an ellipsoid of bounds (``centre``, ``random:``, ``boundary:``)."""
-    kind = str(spec).strip().partition(":")[0].lower()
-    return kind in ("centre", "center", "random", "boundary", "lightest")
-
-
-def _bounds_plant(nominal, bf: dict, spec: str):
-    """A plant drawn from the ellipsoid of an identification's ``bounds.toml`` (``bf``, read by
-    :func:`rc3r.identify.bounds_file.load_bounds`; :func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`)."""
-    from .uncertainty.ellipsoid import draw_from_ellipsoid
-
-    return draw_from_ellipsoid(nominal, bf["theta0"], bf["P"], spec, source=f"bounds file {bf['source']}",
-                               physical=bf.get("physical"))
-
-
-def _payload_plant(nominal, payload, spec: str, ubox=None):
-    """The plant carrying a payload: ``upper`` (default, also for ``nominal``) the heaviest,
-    ``lower`` the lightest, ``random:<seed>`` a seeded uniform mass, ``mass:<kg>`` a given one.
-
-    With the URDF's own uncertainty ``ubox`` (a :class:`rc3r.uncertainty.box.Box`, ``[plant]
-    urdf_uncertainty``) ``random:<seed>`` also draws the arm in it (seed ``SeedSequence([seed, 36])``),
-    and ``<payload spec>+corner:<bits>[@s]`` puts the arm at a corner of it (``rc3r design``'s search)."""
-    from .uncertainty.payload import with_payload
-
-    (lo, hi), com = payload
-    spec, plus, arm = spec.partition("+")
-    if plus and ubox is None:
-        raise ConfigError(f"plant {spec}+{arm!r}: '+' needs [plant] urdf_uncertainty > 0")
-    kind, _, arg = spec.partition(":")
-    if ubox is not None:
-        from .uncertainty.box import perturb
-
-        if plus:  # checked with the payload on (_plant): the search realised it so
-            nominal = perturb(nominal, ubox, arm)
-        elif kind == "random" and arg.isdigit():
-            sub = int(np.random.SeedSequence([int(arg), 36]).generate_state(1, np.uint64)[0] >> np.uint64(1))
-            nominal = perturb(nominal, ubox, f"random:{sub}", simulable=True)
-    if kind in ("nominal", "upper") and not arg:
-        m = hi
-    elif kind == "lower" and not arg:
-        m = lo
-    elif kind == "random" and arg.isdigit():
-        m = float(np.random.default_rng(int(arg)).uniform(lo, hi))
-    elif kind == "mass":
-        try:
-            m = float(arg)
-        except ValueError:
-            m = float("nan")
-        if not lo <= m <= hi:
-            raise ConfigError(f"plant {spec!r}: the payload mass must be a number in [{lo:g}, {hi:g}] kg")
-    else:
-        raise ConfigError(f"bad plant {spec!r} with a payload: expected upper, lower, random:<seed>, mass:<kg>")
-    return with_payload(nominal, m, com, label=f"{nominal.label} + payload {m:g} kg")
 
 
 def _model(law_cls, plant, bounds: _Bounds, perturbed: bool, cfg: dict) -> dict:
@@ -608,7 +449,7 @@ def _urdf_robot_cached(urdf, lock: dict | None = None):
     import os
 
     from .robots import load_urdf_robot
-    from .robots.urdf_names import resolve_erd
+    from .urdf_names import resolve_erd
 
     urdf = resolve_erd(urdf)  # erd:REL -> the file of example-robot-data
     try:

@@ -93,7 +93,7 @@ def _lock(text):
 
 def urdf_path(text):
     """``--urdf``: a path, or ``erd:REL`` for a file of example-robot-data (its path, resolved here)."""
-    from ..robots.urdf_names import resolve_erd
+    from ..urdf_names import resolve_erd
 
     return str(resolve_erd(text))
 

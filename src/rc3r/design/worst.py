@@ -26,7 +26,10 @@ import numpy as np
 
 from .rule import ThetaModel, stability_limit
 
-__all__ = ["loop_gains", "plant_gain", "search_box", "search_ellipsoid", "Search"]
+#: Seeded boundary draws (``boundary:0`` ...) the ellipsoid's search keeps beside its closed-form points.
+BOUNDARY_DRAWS = 24
+
+__all__ = ["loop_gains", "plant_gain", "search_box", "search_ellipsoid", "Search", "Hardest", "BOUNDARY_DRAWS"]
 
 
 class Search:
@@ -359,3 +362,79 @@ def search_ellipsoid(search: Search, realise, G, rate: float, *, delay: int = 0,
         out[0] = {**out[0], "why": "largest T lambda_max(M_p^-1 G) found: " + out[0]["why"]}
     return out
 
+
+class Hardest:
+    """The worst-plant search of a design (:mod:`rc3r.design.worst`) on its bounds: a box of standard
+    parameters (searched corner by corner), a payload range (its two ends, exact; with the URDF's uncertainty
+    the corners of its box around the lighter end), an identified ellipsoid (its lightest points along the
+    worst directions, closed form)."""
+
+    def __init__(self, cfg, spec, sp, rate, delay):
+        self.rate, self.delay = float(rate), int(delay)
+        self.search = Search(spec.robot_model, sp, spec.trajectory)
+        self.kind, self.box, self.ends, self.prefix = "off", None, {}, ""
+        f = float(cfg.get("plant", {}).get("urdf_uncertainty", 0.0))
+        ubox = None
+        if f > 0:
+            from ..uncertainty.box import urdf_box
+
+            ubox = urdf_box(spec.robot_model, f)
+        self.urdf_uncertainty = f
+        if cfg.get("payload"):
+            from ..plant_sets import _payload, _payload_plant
+
+            pay = _payload(cfg["payload"]["mass"], cfg["payload"].get("com"))
+            self.kind = "payload"
+            self.ends = {e: _payload_plant(spec.robot_model, pay, e).theta for e in ("lower", "upper")}
+            if ubox is not None:  # the corners of the URDF's uncertainty around the lightest end
+                from ..uncertainty.payload import with_payload
+
+                lower = with_payload(spec.robot_model, pay[0][0], pay[1], label="lower")
+                self.search = Search(lower, sp, spec.trajectory)
+                self.kind, self.box, self.prefix = "payload + URDF uncertainty", ubox, "lower+"
+        elif cfg.get("bounds"):  # the identified ellipsoid: its lightest points along the worst directions
+            from ..identify.bounds_file import load_bounds
+            from ..uncertainty.ellipsoid import draw_from_ellipsoid
+
+            bf = load_bounds(cfg["bounds"], robot=spec.robot_model)
+            self.kind = "ellipsoid"
+            self.realise = lambda s: draw_from_ellipsoid(spec.robot_model, bf["theta0"], bf["P"], s,
+                                                         source=f"bounds file {bf['source']}")
+            self.pool = [(f"boundary:{k}", self.search.mass(self.realise(f"boundary:{k}").theta))
+                         for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
+        else:
+            from ..plant_sets import resolve_box
+            from ..uncertainty.box import widened
+
+            box = resolve_box(spec.robot_model, cfg.get("box"))
+            self.kind, self.box = "box", box if ubox is None else widened(box, ubox)
+            if ubox is not None:
+                self.kind = "box + URDF uncertainty"
+
+    def gains(self, sliding, **w):
+        return loop_gains(self.search, sliding, **w)
+
+    def model_gain(self, sliding, **w) -> float:
+        """T max_t lambda_max(M_0^-1 G): the rule's own figure on the controller's model."""
+        return float(np.max(plant_gain(self.gains(sliding, **w), self.search.M0)[0]) / self.rate)
+
+    def plants(self, sliding, **w) -> list[dict]:
+        """The hardest plants for the law's gains (most demanding first, at most 3)."""
+        G = self.gains(sliding, **w)
+        if self.kind == "ellipsoid":
+            return search_ellipsoid(self.search, self.realise, G, self.rate, delay=self.delay, pool=self.pool)[:3]
+        if self.box is not None:
+            found = search_box(self.search, self.box, G, self.rate, delay=self.delay)
+            if self.prefix:  # corners of the arm around the payload's lightest end
+                found = [{**e, "spec": "lower" if e["spec"] == "nominal" else self.prefix + e["spec"]}
+                         for e in found]
+            return found[:3]
+        out = []
+        for end, theta in self.ends.items():
+            lam, _ = plant_gain(G, self.search.mass(theta))
+            k = int(np.argmax(lam))
+            out.append({"spec": end, "T_lambda": float(lam[k] / self.rate), "t": float(self.search.sp.t[k]),
+                        "limit": stability_limit(self.delay),
+                        "why": f"the payload's {end} end (M grows with the mass: the lower end is the lightest "
+                               "in every direction)"})
+        return sorted(out, key=lambda e: -e["T_lambda"])

@@ -1,7 +1,7 @@
 r"""Physical consistency of identified coefficients: a semidefinite program on pseudo-inertia matrices.
 
 A body's standard parameters ``pi_k = (m, h, I)`` (mass, first moment ``h = m c``, inertia
-``I`` about the joint origin; Pinocchio's order, :data:`~rc3r.robots.base_parameters.STD_KEYS`)
+``I`` about the joint origin; Pinocchio's order, :data:`~rc3r.conventions.STD_KEYS`)
 are physically consistent -- some mass distribution realises them: mass >= 0, inertia about the
 centre of mass positive semidefinite *and* satisfying the triangle inequalities -- exactly when
 the **pseudo-inertia matrix** is positive semidefinite (Wensing, Kim, Slotine, "Linear matrix

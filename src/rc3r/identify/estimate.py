@@ -57,9 +57,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, ParameterError
 
-__all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit",
+__all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit", "ellipsoid_factor", "draw_theta",
            "check_excitation", "weighted_least_squares", "spectral_covariance",
            "dominating", "ellipsoid"]
 
@@ -293,3 +293,34 @@ def ellipsoid(cov_theta, confidence: float, dof: float | None = None) -> dict:
     return {"P": P, "chi2": q, "quantile": which, "dof": None if dof is None else float(dof),
             "rho": float(np.sqrt(np.linalg.eigvalsh(Pinv)[-1])), "rho_i": np.sqrt(np.diag(Pinv)),
             "confidence": float(confidence)}
+
+
+def ellipsoid_factor(P) -> np.ndarray:
+    r"""``L`` (p, p) with :math:`L L^T = P^{-1}`: :math:`\theta_0 + L u`, :math:`\|u\| \le 1`, fills the ellipsoid.
+
+    Raises
+    ------
+    ParameterError
+        ``P`` is not symmetric positive definite.
+    """
+    P = np.asarray(P, dtype=float)
+    if P.ndim != 2 or P.shape[0] != P.shape[1] or not np.all(np.isfinite(P)):
+        raise ParameterError(f"ellipsoid matrix P must be a finite square matrix, got shape {P.shape}")
+    w, V = np.linalg.eigh(0.5 * (P + P.T))
+    if w[0] <= 0:
+        raise ParameterError(f"ellipsoid matrix P is not positive definite (smallest eigenvalue {w[0]:.3g})")
+    return V / np.sqrt(w)
+
+
+def draw_theta(theta0, P, rng: np.random.Generator, boundary: bool = False) -> np.ndarray:
+    r"""One :math:`\theta` uniform in the ellipsoid (or on its boundary), (p,).
+
+    :math:`u = g\,r^{1/p}/\|g\|` with :math:`g \sim N(0, I_p)`, :math:`r \sim U(0, 1)` (``r = 1`` on
+    the boundary) is uniform in the unit ball; :math:`\theta = \theta_0 + L u`.
+    """
+    theta0 = np.asarray(theta0, dtype=float)
+    L = ellipsoid_factor(P)
+    p = theta0.size
+    g = rng.standard_normal(p)
+    r = 1.0 if boundary else rng.uniform() ** (1.0 / p)
+    return theta0 + L @ (g * (r / np.linalg.norm(g)))

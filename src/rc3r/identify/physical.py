@@ -1,7 +1,7 @@
 r"""A physically consistent, plausible estimate: least squares in the log-Cholesky chart, pulled to the URDF.
 
 Every body's 10 standard parameters ``pi_k = (m, h, I)`` (Pinocchio's order,
-:data:`~rc3r.robots.base_parameters.STD_KEYS`) are physically consistent exactly when its 4x4
+:data:`~rc3r.conventions.STD_KEYS`) are physically consistent exactly when its 4x4
 **pseudo-inertia** ``J_k`` is positive definite (Wensing, Kim, Slotine, RA-L 2018;
 :func:`rc3r.identify.consistency.pseudo_inertia`). The **log-Cholesky chart** (Rucker, Wensing,
 "Smooth parameterization of rigid-body inertia", RA-L 2022) writes ``J = U U^T`` with

@@ -362,14 +362,12 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
     share = draws_inside(pf, T, ell["P"], np.random.default_rng(seed))
     # what a campaign draws (rc3r.uncertainty.ellipsoid.draw_from_ellipsoid): theta uniform in the ellipsoid,
     # realised in the log-Cholesky chart from the consistent estimate's parameters
-    from ..uncertainty.ellipsoid import draw_theta
-
     rng = np.random.default_rng(seed)
     S = covariance_factor(pf.cov_eta)
     t1 = time.perf_counter()
     realised = reached = 0
     for _ in range(REALISE_DRAWS):
-        th = draw_theta(pf.theta, ell["P"], rng)
+        th = _est.draw_theta(pf.theta, ell["P"], rng)
         eta = realise_log_cholesky(T, th, pf.eta, S, best=True)
         dd = T @ standard_of(eta) - pf.theta
         realised += bool(np.linalg.norm(T @ standard_of(eta) - th) <= 1e-10 * np.linalg.norm(th))
@@ -378,7 +376,7 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
     pred = R_te @ pf.x
     half = _est.Fit(pf.x, pf.cov, fit.sigma, fit.rows, fit.cond, fit.weights).band(R_te, sigma_raw, confidence)
     nb = pf.standard.size // 10
-    from ..robots.base_parameters import STD_KEYS
+    from ..conventions import STD_KEYS
     from .consistency import model_standard_parameters
 
     pi0 = model_standard_parameters(robot.model)

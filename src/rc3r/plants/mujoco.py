@@ -136,7 +136,7 @@ def plant_urdf_text(text: str, where: str, locked: dict | None = None) -> tuple[
             mimic.append((name, joint.find("mimic").get("joint")))
         moving.append(name)
     if mimic:
-        from ..robots.urdf_names import mimic_advice
+        from ..urdf_names import mimic_advice
 
         raise UrdfError(mimic_advice(where, mimic))
     for inertial in root.iter("inertial"):

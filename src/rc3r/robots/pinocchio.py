@@ -54,12 +54,12 @@ import numpy as np
 from ..errors import ConfigError, ParameterError, UrdfError
 from ..io import MAGNITUDE_NOTE, native_stderr, number_problem, require_file
 from .base import Robot, stack_states
-from .urdf_names import ERD_PREFIX, erd_name, example_robot_data_dir, mimic_advice, resolve_erd
+from ..urdf_names import ERD_PREFIX, erd_name, example_robot_data_dir, mimic_advice, resolve_erd
 from .base_parameters import (BaseParameters, base_parameters, check_model, physical_issues,
                               standard_parameter_names)
 
 #: ``example_robot_data_dir``, ``ERD_PREFIX``, ``resolve_erd``, ``erd_name``, ``mimic_advice`` live in
-#: :mod:`rc3r.robots.urdf_names` (imported here, where they were first defined).
+#: :mod:`rc3r.urdf_names` (imported here, where they were first defined).
 __all__ = ["PinocchioRobot", "NAMED", "CONTINUOUS_LIMIT", "VELOCITY_SHARE", "example_robot_data_dir", "ERD_PREFIX",
            "resolve_erd", "erd_name"]
 

@@ -53,6 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ConfigError, ParameterError
+from ..identify.estimate import draw_theta, ellipsoid_factor  # re-exported: the ellipsoid's own numerics
 
 __all__ = ["MAX_DRAWS", "ELLIPSOID_SPECS", "MASS_SAMPLES", "ellipsoid_factor", "draw_theta", "realise_theta",
            "draw_from_ellipsoid", "lightest_theta", "mass_matrix_of", "require_positive_mass_matrix"]
@@ -65,37 +66,6 @@ MAX_DRAWS = 200
 
 #: The plant specs :func:`draw_from_ellipsoid` understands (besides ``nominal``).
 ELLIPSOID_SPECS = "centre, random:<seed>, boundary:<seed>, lightest:<q>:<x>[:<s>]"
-
-
-def ellipsoid_factor(P) -> np.ndarray:
-    r"""``L`` (p, p) with :math:`L L^T = P^{-1}`: :math:`\theta_0 + L u`, :math:`\|u\| \le 1`, fills the ellipsoid.
-
-    Raises
-    ------
-    ParameterError
-        ``P`` is not symmetric positive definite.
-    """
-    P = np.asarray(P, dtype=float)
-    if P.ndim != 2 or P.shape[0] != P.shape[1] or not np.all(np.isfinite(P)):
-        raise ParameterError(f"ellipsoid matrix P must be a finite square matrix, got shape {P.shape}")
-    w, V = np.linalg.eigh(0.5 * (P + P.T))
-    if w[0] <= 0:
-        raise ParameterError(f"ellipsoid matrix P is not positive definite (smallest eigenvalue {w[0]:.3g})")
-    return V / np.sqrt(w)
-
-
-def draw_theta(theta0, P, rng: np.random.Generator, boundary: bool = False) -> np.ndarray:
-    r"""One :math:`\theta` uniform in the ellipsoid (or on its boundary), (p,).
-
-    :math:`u = g\,r^{1/p}/\|g\|` with :math:`g \sim N(0, I_p)`, :math:`r \sim U(0, 1)` (``r = 1`` on
-    the boundary) is uniform in the unit ball; :math:`\theta = \theta_0 + L u`.
-    """
-    theta0 = np.asarray(theta0, dtype=float)
-    L = ellipsoid_factor(P)
-    p = theta0.size
-    g = rng.standard_normal(p)
-    r = 1.0 if boundary else rng.uniform() ** (1.0 / p)
-    return theta0 + L @ (g * (r / np.linalg.norm(g)))
 
 
 #: Standard-parameter names of one body in Pinocchio's order (``toDynamicParameters``), body 1.

@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..errors import UrdfError
+from .errors import UrdfError
 
 __all__ = ["example_robot_data_dir", "ERD_PREFIX", "resolve_erd", "erd_name", "lock_option", "mimic_advice"]
 
