@@ -394,12 +394,11 @@ class Hardest:
                 self.kind, self.box, self.prefix = "payload + URDF uncertainty", ubox, "lower+"
         elif cfg.get("bounds"):  # the identified ellipsoid: its lightest points along the worst directions
             from ..identify.bounds_file import load_bounds
-            from ..uncertainty.ellipsoid import draw_from_ellipsoid
+            from ..plant_sets import _bounds_plant
 
             bf = load_bounds(cfg["bounds"], robot=spec.robot_model)
             self.kind = "ellipsoid"
-            self.realise = lambda s: draw_from_ellipsoid(spec.robot_model, bf["theta0"], bf["P"], s,
-                                                         source=f"bounds file {bf['source']}")
+            self.realise = lambda s: _bounds_plant(spec.robot_model, bf, s)  # the plants a run of the bounds draws
             self.pool = [(f"boundary:{k}", self.search.mass(self.realise(f"boundary:{k}").theta))
                          for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
         else:

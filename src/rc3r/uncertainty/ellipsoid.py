@@ -318,12 +318,27 @@ def _draw_physical(robot, theta0, P, spec, kind, arg, chart, source):
         except ParameterError as exc:
             raise ParameterError(f"the centre theta_0 of {source} is not simulable: {exc}") from None
         return plant
+    P = np.asarray(P, dtype=float)
+    if kind == "lightest":  # rc3r design's worst plant: the nearest physical point, pulled inside if need be
+        target = lightest_theta(robot, theta0, P, arg, spec)
+        for f in (1.0, 0.75, 0.5, 0.25):
+            theta = np.asarray(theta0, dtype=float) + f * (target - np.asarray(theta0, dtype=float))
+            pi = standard_of(realise_log_cholesky(T, theta, eta0, S, best=True))
+            d = T @ pi - np.asarray(theta0, dtype=float)
+            if d @ P @ d <= 1.0 + 1e-9:
+                try:
+                    plant = robot.with_standard_parameters(pi, spec)
+                    plant.require_simulable()
+                    return plant
+                except ParameterError:
+                    continue
+        raise ParameterError(f"plant {spec!r}: no physical link parameters inside the ellipsoid of {source} "
+                             "realise it")
     if kind not in ("random", "boundary"):
         raise ConfigError(f"bad plant {spec!r} with bounds from {source}: expected nominal, {ELLIPSOID_SPECS}")
     from .box import spec_seed
 
     rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad plant"))
-    P = np.asarray(P, dtype=float)
     for _ in range(MAX_DRAWS):
         theta = draw_theta(theta0, P, rng, boundary=kind == "boundary")
         eta = realise_log_cholesky(T, theta, eta0, S, best=True)
