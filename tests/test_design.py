@@ -384,8 +384,9 @@ def _write_design(cfg: dict, directory) -> str:
 
     from rc3r.design.report import design_toml
 
-    fake = SimpleNamespace(config=cfg, rate=1000.0,
-                           gains=lambda: {"robust": {"K": [5.0] * 6, "Lambda": 10.0, "eps": 1.0}})
+    fake = SimpleNamespace(config=cfg, rate=1000.0, margin=2.0, ok=True, worst={},
+                           gains=lambda: {"robust": {"K": [5.0] * 6, "Lambda": 10.0, "eps": 1.0}},
+                           recommendation=lambda: {"law": "robust"})
     text = design_toml(fake, "made by: a test", base=directory)
     (directory / "design.toml").write_text(text)
     return text

@@ -158,11 +158,14 @@ def test_montecarlo_on_bounds_draws_plants_in_the_ellipsoid(bounds_3r, tmp_path)
     assert all(r["status"] == "ok" for r in rows)
 
 
-def test_design_on_bounds_verifies_on_the_centre_and_draws_and_names_the_file_absolutely(bounds_3r, tmp_path,
-                                                                                       monkeypatch):
+def test_design_on_bounds_verifies_on_the_centre_and_draws_and_names_the_file_portably(bounds_3r, tmp_path,
+                                                                                      monkeypatch):
     """design --bounds (relative path, from another directory): its runs are the ellipsoid's centre and N
     draws (theta_dist 0 for the centre to 1e-9 rho, > 0 and <= rho for the draws), and design.toml names the
-    bounds file by its absolute path, so montecarlo --config design.toml runs from any directory."""
+    bounds file relative to itself (issue 33: a design survives a moved project), so montecarlo --config
+    design.toml runs from any directory."""
+    import os
+
     from rc3r.campaign import read_rows
     from rc3r.io import read_toml
 
@@ -172,7 +175,7 @@ def test_design_on_bounds_verifies_on_the_centre_and_draws_and_names_the_file_ab
     main(["design", "--robot", "rr3", "--bounds", path.name, "--rate", "1000", "--margin", "1", "--n", "2",
           "--duration", "0.3", "--workers", "1", "--out", str(out)])
     cfg = read_toml(out / "design.toml", "design")
-    assert cfg["bounds"] == str(path.resolve())
+    assert cfg["bounds"] == os.path.relpath(path.resolve(), out.resolve())
     rows = [r for r in read_rows(out / "runs.csv") if r["controller"] == "robust"]
     rho = rows[0]["rho"]
     centre = [r["theta_dist"] for r in rows if r["job"].startswith("centre/")]

@@ -99,15 +99,6 @@ class Identification:
         n = self.sigma.size
         return {k: self.x[self.p + i * n: self.p + (i + 1) * n] for i, k in enumerate(self.friction_kinds)}
 
-    def held_out_rms(self, x) -> np.ndarray:
-        """Held-out RMS per joint (n,) [N m] of the logged torques minus ``Phi x`` for any unknowns ``x`` (m,).
-
-        ``Phi`` is the unfiltered regressor at the held-out stamps and prediction states, as for
-        ``validation.rms`` (which is ``held_out_rms(self.x)``).
-        """
-        R = self.held_out["rows"]
-        return np.sqrt(np.mean((self.held_out["tau"] - R @ np.asarray(x, dtype=float)) ** 2, axis=0))
-
     def bounds(self, which: str = "auto") -> dict:
         """``theta0, rho, rho_i, P, confidence, chi2`` of the confidence ellipsoid (and ``physical``).
 
