@@ -143,7 +143,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 q1, qd1 = advance(x[:n], x[n:2 * n], u, Ts)  # simulate() refused joint-torque effects
                 xs = np.concatenate([q1, qd1])
                 ok = bool(np.all(np.isfinite(xs)))
-            elif reference or opt.sampled_method == "ros4":
+            elif reference or opt.sampled_method in ("ros4", "rodas", "sdirk"):
                 from scipy.integrate import solve_ivp  # here: importing SciPy's integrators costs ~1 s
 
                 sol = solve_ivp(lambda _t, y: ctl.plant_rhs(y, u), (t, t + Ts), x[:2 * n],
