@@ -90,8 +90,8 @@ def main(argv=None) -> int:
         yard, _, _ = sweep("ros4", 1e-10, 1e-12)
         for name, kind, rt, at, reuse in (("ros4 1e-4/1e-6 (today)", "ros4", 1e-4, 1e-6, 1),
                                           ("rodas 1e-4/1e-6", "rodas", 1e-4, 1e-6, 1),
-                                          ("rodas 1e-4/1e-6 jac/period", "rodas", 1e-4, 1e-6, 1000),
-                                          ("rodas 1e-3/1e-5", "rodas", 1e-3, 1e-5, 1),
+
+
                                           ("rodas 1e-6/1e-8", "rodas", 1e-6, 1e-8, 1),
                                           ("sdirk 1e-4/1e-6", "sdirk", 1e-4, 1e-6, 1),
                                           ("sdirk 1e-6/1e-8", "sdirk", 1e-6, 1e-8, 1)):
@@ -102,7 +102,7 @@ def main(argv=None) -> int:
             from dataclasses import replace
             o = spec.options
             tight = simulate(P, spec.law, spec.trajectory, replace(o, sampled_method="ros4", period_rtol=1e-10,
-                                                                    period_atol=1e-12))
+                                                                    period_atol=1e-12, max_steps=1e12))
             for m in ("ros4", "rodas", "sdirk"):
                 r_ = simulate(P, spec.law, spec.trajectory, replace(o, sampled_method=m))
                 print(f"| {arm} | closed loop {m} (default tol) vs ros4 1e-10/1e-12 | rhs {r_.rhs_evals} against "

@@ -51,7 +51,7 @@ def announce_engine(spec) -> None:
         lam = stiffness(plant)
         nsub = default_substeps(plant, opt.rate, lam)
         method = plant_method(plant, opt, lam)
-        if method in ("ros4", "rodas"):
+        if method in ("sdirk", "ros4", "rodas"):
             _progress(f"rc3r: stiff friction (it damps a joint at up to {lam:.3g} 1/s): the plant is advanced by "
                       f"adaptive L-stable {method.upper()} steps per period instead of {nsub} RK4 sub-steps "
                       "([simulation] sampled_method)")

@@ -96,8 +96,8 @@ class SimOptions:
     rtol, atol : float
         Integrator tolerances (continuous mode), mixed relative/absolute per state.
     period_rtol, period_atol : float
-        Tolerances of the Rosenbrock periods (``sampled_method = "ros4"``, ``"rodas"``): 1e-4 and 1e-6,
-        set for ROS4, because ROS4's
+        Tolerances of the implicit periods (``sampled_method`` ``"sdirk"``, ``"ros4"``, ``"rodas"``): 1e-4
+        and 1e-6, set for ROS4, because ROS4's
         embedded estimate is not L-stable and counts a damped transient as error, so the measured
         error is far below them (within 4.5e-9 rad of the reference engine over 0.3 s of the robust
         law on the xArm7 and the Z1 with their URDF friction, 5.5-6.7x fewer right-hand sides than
@@ -107,15 +107,16 @@ class SimOptions:
         from the plant (:func:`default_substeps`: steps of at most 1 ms for a rigid body, 0.25 ms
         with friction); :attr:`substeps` alone, without a plant, is the conservative
         ``ceil(T / 0.25 ms)``.
-    sampled_method : {"auto", "rk4", "ros4", "rodas"}
+    sampled_method : {"auto", "rk4", "sdirk", "ros4", "rodas"}
         How the plant is advanced over a sampling period under the held torque (sampled mode).
-        ``"rk4"``: :attr:`nsub` classical RK4 sub-steps. ``"ros4"``, ``"rodas"``: adaptive L-stable
-        Rosenbrock steps at ``period_rtol``, ``period_atol`` (fast engine: ROS4 or the stiffly accurate
-        RODAS, a Jacobian per step; python engine: SciPy's Radau for both, the reference path), for plants
-        whose friction damps a light joint faster than RK4 can follow (the xArm7's URDF damping: 738
-        sub-steps per 2 ms period). ``"auto"`` (default): ``"rodas"`` when ``nsub`` is not given and
-        :func:`stiffness` limits the RK4 step below :data:`EFFECT_SUBSTEP_S`, else ``"rk4"``
-        (:func:`plant_method`).
+        ``"rk4"``: :attr:`nsub` classical RK4 sub-steps. ``"sdirk"``, ``"ros4"``, ``"rodas"``: adaptive
+        L-stable steps at ``period_rtol``, ``period_atol``, for plants whose friction damps a light joint
+        faster than RK4 can follow (the xArm7's URDF damping: 738 sub-steps per 2 ms period). Fast engine:
+        ``"sdirk"`` Alexander's SDIRK3 with Newton's method on the friction (its slope at every iterate,
+        M^-1 once per period), ``"ros4"`` and ``"rodas"`` Rosenbrock steps with a forward-difference
+        Jacobian per step; python engine: SciPy's Radau for all three, the reference path. ``"auto"``
+        (default): ``"sdirk"`` when ``nsub`` is not given and :func:`stiffness` limits the RK4 step below
+        :data:`EFFECT_SUBSTEP_S`, else ``"rk4"`` (:func:`plant_method`).
     engine : {"auto", "fast", "python", "reference"}
     jac_reuse : int
         Fast engine, continuous mode: accepted Rosenbrock steps one finite-difference

@@ -10,8 +10,9 @@ r"""The compiled engine's integrators, written once for any n and p (numba): a t
   differences (:func:`_jacobian`). Other stored rows are cubic Hermite interpolants.
 * :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and held; the plant is
   integrated over each period by RK4 with ``nsub`` sub-steps, or for a stiff plant (friction on a light
-  joint) by adaptive RODAS steps (:func:`_rodas_period`, the default) or ROS4 steps (:func:`_stiff_period`)
-  on the plant alone; the controller state by forward Euler.
+  joint) by adaptive SDIRK3 steps with Newton on the friction (:func:`_sdirk_period`, the default), RODAS
+  steps (:func:`_rodas_period`) or ROS4 steps (:func:`_stiff_period`) on the plant alone; the controller
+  state by forward Euler.
 
 Effects (``fx`` of :meth:`rc3r.plants.Plant.pack`, the loop's noise, quantization, delay) are applied by
 :mod:`rc3r.plants._kernels`; the law by :mod:`rc3r.controllers._kernels` (its integer code). The robot
@@ -471,11 +472,15 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
     adaptive steps of Alexander's SDIRK3 (:data:`_SDIRK3`), each stage solved by Newton's method on the
     friction: the Newton matrix is ``[[I, -h g I], [0, I + h g M0^-1 phi'(qd)]]`` with the friction's slope
     ``phi'`` at the current iterate (so the smooth Coulomb knee, nonlinear at the scale v_s, is solved, not
-    linearized) and ``M0^-1`` the inverse mass matrix at the step's start, by ``n`` forward dynamics (the
-    forward dynamics is affine in the torque: ``M^-1 e_j = fd(tau0 + e_j) - fd(tau0)``). The rigid body's
+    linearized) and ``M0^-1`` the inverse mass matrix at the period's start, by ``n`` forward dynamics (the
+    forward dynamics is affine in the torque: ``M^-1 e_j = fd(tau0 + e_j) - fd(tau0)``; M moves by a part in
+    1e3 over a 1 ms period, which slows the iteration by that factor). The rigid body's
     own slopes (gravity, Coriolis) are left out of it: they slow the iteration by a factor ~ (h g)^2 |dqdd/dq|,
-    not by the damping. So a step costs ``n`` + (Newton iterations) right-hand sides whatever the friction's
-    stiffness. The error estimate (embedded order 2) is filtered by the Newton matrix, as RADAU5's
+    not by the damping. So a period costs ``n + 1`` right-hand sides plus one per Newton iteration (about two
+    per stage), whatever the friction's stiffness. A stage has converged when Newton's update is below 1e-3
+    of the tolerances' scale (that scale never under 1e-12 (1 + |x|), so tolerances below rounding end in
+    the step budget, not in a stall); it is rejected after :data:`_NEWTON_MAX` iterations. The error
+    estimate (embedded order 2) is filtered by the Newton matrix, as RADAU5's
     (Hairer & Wanner IV.8), so a damped transient does not count as error. ``hs[0]``: the step to try, carried
     from period to period. ``V`` (10, 2n), ``Mi``, ``N`` (n, n), ``piv`` (n,): scratch. At most ``budget``
     steps. Returns ``(status, n_f)``."""
@@ -488,21 +493,21 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
         return NOTPD, 1
     nf, steps, t = 1, 0, 0.0
     g = _SG
+    # M0^-1 by columns: the joint torque of x plus a unit torque on joint j, less F0 (fd is affine in tau)
+    _joint_torque(fx, fric, x[n:n2], ua, tau)
+    for j in range(n):
+        s_ = max(1.0, abs(tau[j]))
+        tau[j] += s_
+        ok = _fd(kc, x[0:n], x[n:n2], tau, col, wk)
+        tau[j] -= s_
+        if not ok:
+            return NOTPD, nf
+        for i in range(n):
+            Mi[i, j] = (col[i] - F0[n + i]) / s_
+    nf += n
     while t < Ts * (1.0 - 1e-12):
         h = min(hs[0], Ts - t)
         cut = h < hs[0]
-        # M0^-1 by columns: the joint torque of x plus a unit torque on joint j, less F0 (fd is affine in tau)
-        _joint_torque(fx, fric, x[n:n2], ua, tau)
-        for j in range(n):
-            s_ = max(1.0, abs(tau[j]))
-            tau[j] += s_
-            ok = _fd(kc, x[0:n], x[n:n2], tau, col, wk)
-            tau[j] -= s_
-            if not ok:
-                return NOTPD, nf
-            for i in range(n):
-                Mi[i, j] = (col[i] - F0[n + i]) / s_
-        nf += n
         while True:
             steps += 1
             if steps > budget:
@@ -533,8 +538,8 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                         dq = -(Y[i] - base[i] - hg * xnew[i]) + hg * col[i]
                         Y[i] += dq
                         Y[n + i] += col[i]
-                        a0 = dq / (atol + rtol * abs(Y[i]))
-                        a1 = col[i] / (atol + rtol * abs(Y[n + i]))
+                        a0 = dq / (atol + rtol * abs(Y[i]) + 1e-12 * (1.0 + abs(Y[i])))  # never below rounding
+                        a1 = col[i] / (atol + rtol * abs(Y[n + i]) + 1e-12 * (1.0 + abs(Y[n + i])))
                         dn += a0 * a0 + a1 * a1
                     if math.sqrt(dn / n2) <= 1e-3:
                         conv = True
@@ -573,9 +578,7 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
         t = Ts if cut else t + h
         for i in range(n2):
             x[i] = xnew[i]
-        if not _plant_rhs(x, ua, kc, wk, fx, fric, F0, tau):
-            return NOTPD, nf + 1
-        nf += 1
+            F0[i] = Fs[2, i]  # the last stage's slope: f at the new state, to the Newton tolerance
         hn = h * (5.0 if e == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / e) ** (1.0 / 3.0))))
         hs[0] = max(hs[0], hn) if cut else hn
     return OK, nf
