@@ -10,8 +10,9 @@ Issue 37's acceptance command, per arm, once per period method in one run (the m
     python benchmarks/friction_design.py --n 50 --duration 10 --workers 2 --out FD50   # the issue's size
 
 Prints one row per arm and method: wall time, its ratio to the first method's, the design's verdict
-(``ok``, the recommended law, the layer eps), and the largest difference of any worst error in
-``design.json`` from the first method's (every ``worst_error`` leaf, paired by path) and whether every
+(``ok``, the recommended law and its worst error, the layer eps), and the largest difference of any worst
+error in ``design.json`` from the first method's (every ``worst_error`` leaf, paired by path; in brackets
+those of the comparison laws under ``baselines``, FBL and the adaptive law) and whether every
 verdict count, ``ok`` and recommendation are identical. Run the methods' commands one after the other
 (never concurrently), so the two share the machine's load.
 """
@@ -43,21 +44,25 @@ def _leaves(x, path=()):
         yield path, x
 
 
-def compare(a: dict, b: dict) -> tuple[float, bool, list]:
-    """Largest |difference| of the ``worst_error`` leaves of two design.json, whether every verdict-like
-    leaf (:data:`_SAME` keys, anywhere) is equal, and the differing ones."""
+def compare(a: dict, b: dict) -> tuple[float, float, bool, list]:
+    """Largest |difference| of the ``worst_error`` leaves of two design.json, outside and inside
+    ``baselines`` (the comparison laws: FBL, the adaptive law), whether every verdict-like leaf
+    (:data:`_SAME` keys, anywhere) is equal, and the differing ones."""
     la, lb = dict(_leaves(a)), dict(_leaves(b))
-    worst, same, diffs = 0.0, True, []
+    worst, base, same, diffs = 0.0, 0.0, True, []
     for p, v in la.items():
         if p not in lb:
             continue
         w = lb[p]
         if any("worst_error" in k for k in p) and isinstance(v, (int, float)) and isinstance(w, (int, float)):
-            worst = max(worst, abs(float(v) - float(w)))
+            if p[0] == "baselines":
+                base = max(base, abs(float(v) - float(w)))
+            else:
+                worst = max(worst, abs(float(v) - float(w)))
         elif any(k in _SAME for k in p) and v != w and "wall" not in "/".join(p):
             same = False
             diffs.append(("/".join(p), v, w))
-    return worst, same, diffs
+    return worst, base, same, diffs
 
 
 def main(argv=None) -> int:
@@ -68,7 +73,7 @@ def main(argv=None) -> int:
     p.add_argument("--duration", type=float, default=2.0)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--methods", default="ros4,rodas", help="sampled methods; the first is the baseline")
+    p.add_argument("--methods", default="ros4,sdirk", help="sampled methods; the first is the baseline")
     p.add_argument("--out", required=True)
     args = p.parse_args(argv)
     out = Path(args.out)
@@ -77,6 +82,7 @@ def main(argv=None) -> int:
     print(f"# friction designs, {time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime())} UTC, rate {args.rate:g} Hz, "
           f"n {args.n}, duration {args.duration:g} s, workers {args.workers}, load {os.getloadavg()[0]:.2f}")
     print("| arm | sampled method | wall [s] | wall ratio | design ok, law, eps | max\\|d worst error\\| [rad] "
+          "(baselines) "
           "| verdicts identical | load at end |")
     print("|---|---|---|---|---|---|---|---|")
     for arm in args.arms.split(","):
@@ -100,14 +106,15 @@ def main(argv=None) -> int:
                 print(f"| {arm} | {m} | {wall:.1f} | | failed (exit {proc.returncode}, {out / f'{arm}-{m}.log'}) | | | |")
                 continue
             info = json.loads(path.read_text())
-            head = f"{info.get('ok')}, {info.get('recommendation')}, {info.get('eps')}"
+            rec = info.get("recommendation") or {}
+            head = f"{info.get('ok')}, {rec.get('law')} {rec.get('worst_error', float('nan')):.6g} rad, eps {info.get('eps'):.4g}"
             if first is None:
                 first = (wall, info)
                 print(f"| {arm} | {m} | {wall:.1f} | 1 | {head} | (baseline) | | {os.getloadavg()[0]:.2f} |",
                       flush=True)
                 continue
-            worst, same, diffs = compare(first[1], info)
-            print(f"| {arm} | {m} | {wall:.1f} | {wall / first[0]:.3g} | {head} | {worst:.3g} | "
+            worst, base, same, diffs = compare(first[1], info)
+            print(f"| {arm} | {m} | {wall:.1f} | {wall / first[0]:.3g} | {head} | {worst:.3g} ({base:.3g}) | "
                   f"{'yes' if same else 'NO: ' + str(diffs[:3])} | {os.getloadavg()[0]:.2f} |", flush=True)
     return 0
 
