@@ -107,7 +107,9 @@ def main(argv=None) -> int:
                 continue
             info = json.loads(path.read_text())
             rec = info.get("recommendation") or {}
-            head = f"{info.get('ok')}, {rec.get('law')} {rec.get('worst_error', float('nan')):.6g} rad, eps {info.get('eps'):.4g}"
+            we, eps = rec.get("worst_error"), info.get("eps")
+            head = (f"{info.get('ok')}, {rec.get('law')} {'-' if we is None else f'{we:.6g}'} rad, "
+                    f"eps {'-' if eps is None else f'{eps:.4g}'}")
             if first is None:
                 first = (wall, info)
                 print(f"| {arm} | {m} | {wall:.1f} | 1 | {head} | (baseline) | | {os.getloadavg()[0]:.2f} |",
