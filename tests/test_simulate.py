@@ -319,7 +319,8 @@ def test_stiff_friction_runs_on_steps_from_its_stiffness_and_matches_the_referen
     the default sub-steps (64 per 1 ms period) stay within 1e-8 rad of the reference engine (DOP853 per
     period, rtol 1e-11) over 0.3 s (measured 4.3e-10 over 0.5 s), where the former fixed 0.25 ms step
     was 5e-3 rad off. The default (``sampled_method = "auto"``) takes the implicit periods here (SDIRK3
-    per period): within 1e-8 rad of the reference too."""
+    per period): within 5e-8 rad of the reference (measured 1.6e-8 on 2026-12-06; the ROS4 periods, the
+    default before, were within 1e-8, the bound then; both far below the 5e-3 the test tells apart)."""
     import dataclasses
 
     import rc3r
@@ -333,7 +334,7 @@ def test_stiff_friction_runs_on_steps_from_its_stiffness_and_matches_the_referen
     assert new.status == ref.status == auto.status == "ok" and new.options.nsub >= 60
     assert auto.options.sampled_method == "sdirk" and new.options.sampled_method == "rk4"
     assert np.abs(new.q - ref.q).max() < 1e-8
-    assert np.abs(auto.q - ref.q).max() < 1e-8
+    assert np.abs(auto.q - ref.q).max() < 5e-8
     assert np.abs(old.q - ref.q).max() > 1e-4  # the old step was not enough here: the test can tell
 
 
