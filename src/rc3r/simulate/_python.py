@@ -8,7 +8,8 @@ loop's effects (:mod:`rc3r.plants.loop`) and its torque goes through their delay
 body with an ``advance(q, qd, u, T)`` method (MuJoCo, :mod:`rc3r.plants.mujoco`) integrates
 the held torque itself (its own RK4 at a fine step) instead of this module's RK4. ``python``: SciPy ``Radau`` at the options'
 tolerances (continuous) or RK4 with ``nsub`` sub-steps per period (sampled; SciPy's Radau per period
-for ``SimOptions.sampled_method = "ros4"``, a stiff plant).
+for ``SimOptions.sampled_method`` ``"sdirk"``, ``"ros4"`` or ``"rodas"``, a stiff plant: the reference path the
+compiled engine's implicit periods are compared with).
 ``reference``: ``Radau`` at ``rtol <= 1e-11`` (continuous) or ``DOP853`` per period
 (sampled).
 """
