@@ -160,8 +160,8 @@ def test_fresh_process_with_an_empty_cache_compiles_nothing(tmp_path):
 def test_run_says_when_stiff_friction_multiplies_the_sub_steps(capsys):
     """The line rc3r run prints before a sampled run on a stiff friction: the damping rate and the
     sub-step count (64 for the UR5 with --friction 0.5:10 at 1 kHz: ceil(T lambda), lambda from
-    rc3r.simulate.stiffness). By default (``sampled_method = "auto"``) such a plant is advanced by ROS4
-    periods and the line says so; with ``sampled_method = "rk4"`` it says the sub-steps multiply the
+    rc3r.simulate.stiffness). By default (``sampled_method = "auto"``) such a plant is advanced by SDIRK
+    periods and the line says so (``"ros4"``: ROS4 periods); with ``sampled_method = "rk4"`` it says the sub-steps multiply the
     cost. A rigid plant prints no such line."""
     import dataclasses
 
@@ -172,11 +172,13 @@ def test_run_says_when_stiff_friction_multiplies_the_sub_steps(capsys):
     n = default_substeps(stiff.true_plant, 1000.0)
     announce_engine(stiff)
     err = capsys.readouterr().err
-    assert n > 16 and f"adaptive L-stable ROS4 steps per period instead of {n} RK4 sub-steps" in err
+    assert n > 16 and f"adaptive L-stable SDIRK steps per period instead of {n} RK4 sub-steps" in err
+    announce_engine(dataclasses.replace(stiff, options=dataclasses.replace(stiff.options, sampled_method="ros4")))
+    assert f"adaptive L-stable ROS4 steps per period instead of {n} RK4 sub-steps" in capsys.readouterr().err
     assert f"{stiffness(stiff.true_plant):.3g} 1/s" in err
     announce_engine(dataclasses.replace(stiff, options=dataclasses.replace(stiff.options, sampled_method="rk4")))
     err = capsys.readouterr().err
-    assert f"{n} RK4 sub-steps per 1 ms period" in err and "ROS4" not in err
+    assert f"{n} RK4 sub-steps per 1 ms period" in err and "ROS4" not in err and "SDIRK" not in err
     assert f"{stiffness(stiff.true_plant):.3g} 1/s" in err
     rigid = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=0.1)
     announce_engine(rigid)

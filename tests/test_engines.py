@@ -305,16 +305,16 @@ _ONE_JOINT = """<?xml version="1.0"?>
 """
 
 
-@pytest.mark.parametrize("engine", ["fast", "python"])
-def test_stiff_viscous_plant_period_map_is_the_exponential(engine, tmp_path):
+@pytest.mark.parametrize("engine, method", [("fast", "auto"), ("fast", "ros4"), ("python", "auto")])
+def test_stiff_viscous_plant_period_map_is_the_exponential(engine, method, tmp_path):
     """A rotor about the gravity axis (M = I = 1e-4 kg m^2, no gravity torque) with its URDF's viscous
     damping F = 10 N m s/rad: a time constant I / F = 10 us, 200 times shorter than a 2 ms period, where
     RK4 at the 0.25 ms friction step would blow up (h F / I = 25 > 2.79). ``sampled_method = "auto"``
-    takes the implicit path (ROS4 compiled, Radau in python), and every period is the exact solution
-    of I qdd = u - F qd under the held u:
+    takes the implicit path (SDIRK3 compiled, Radau in python; ``"ros4"``: the ROS4 periods), and every
+    period is the exact solution of I qdd = u - F qd under the held u:
     qd(T) = u/F + (qd0 - u/F) exp(-F T / I), q(T) = q0 + (u/F) T + (qd0 - u/F)(1 - exp(-F T / I)) I / F.
     At the default period tolerances (period_rtol 1e-4, period_atol 1e-6) measured: qd within 1.1e-8
-    rad/s (fast) and 4.3e-10 (python), q within 1.1e-13 and 4.3e-15 rad. Bounds: qd 1e-7 (a tenth of
+    rad/s (fast, ROS4), 5.5e-8 (fast, SDIRK3) and 4.3e-10 (python), q within 1.1e-13 and 4.3e-15 rad. Bounds: qd 1e-7 (a tenth of
     period_atol), q 1e-9, far below a wrong step (a period integrated over 1 % less time is off by
     3.2e-8 rad in q; checked by hand, docs/testing.md)."""
     from rc3r.simulate import plant_method
@@ -323,8 +323,9 @@ def test_stiff_viscous_plant_period_map_is_the_exponential(engine, tmp_path):
     path.write_text(_ONE_JOINT)
     spec = rc3r.build_run(urdf=str(path), controller="fbl", rate=500.0, duration=0.2, friction="urdf",
                           engine=engine)
-    assert plant_method(spec.true_plant, spec.options) == "ros4"
-    res = simulate(spec.true_plant, spec.law, spec.trajectory, spec.options, x0=[0.1, 5.0])  # decays in 10 us
+    opt = replace(spec.options, sampled_method=method)
+    assert plant_method(spec.true_plant, opt) == ("sdirk" if method == "auto" else method)
+    res = simulate(spec.true_plant, spec.law, spec.trajectory, opt, x0=[0.1, 5.0])  # decays in 10 us
     assert res.ok and res.engine == engine and len(res.t) == 101
     I, F, T = 1e-4, 10.0, 1.0 / 500.0
     q0, qd0, u = res.q[:-1, 0], res.qd[:-1, 0], res.u[:-1, 0]
@@ -336,19 +337,46 @@ def test_stiff_viscous_plant_period_map_is_the_exponential(engine, tmp_path):
     assert np.abs(res.q[1:, 0] - q1).max() <= 1e-9
 
 
-def test_stiff_period_work_budget_stops_the_run_with_its_cause(tmp_path):
-    """A ROS4 period that needs more steps than its budget (max(100, max_steps T); here period_rtol 1e-14
-    on the 10 us rotor, max_steps 1/s) ends the run as ``diverged`` with a one-line message naming the
-    period's budget and the two ways out, and keeps the rows before it; it does not hang."""
+@pytest.mark.parametrize("method", ["sdirk", "ros4"])
+def test_stiff_period_work_budget_stops_the_run_with_its_cause(method, tmp_path):
+    """An SDIRK3 or ROS4 period that needs more steps than its budget (max(100, max_steps T); here period_rtol
+    1e-14 on the 10 us rotor, max_steps 1/s) ends the run as ``diverged`` with a one-line message naming the
+    method, the period's budget and the two ways out, and keeps the rows before it; it does not hang."""
     path = tmp_path / "spinner.urdf"
     path.write_text(_ONE_JOINT)
     spec = rc3r.build_run(urdf=str(path), controller="fbl", rate=500.0, duration=0.2, friction="urdf",
                           engine="fast")
-    opt = replace(spec.options, period_rtol=1e-14, period_atol=1e-16, max_steps=1.0)
+    opt = replace(spec.options, period_rtol=1e-14, period_atol=1e-16, max_steps=1.0, sampled_method=method)
     res = simulate(spec.true_plant, spec.law, spec.trajectory, opt, x0=[0.1, 5.0])
     assert res.outcome == "diverged" and len(res.t) >= 1
-    assert "a ROS4 period of the plant needed more than 100 steps" in res.message
+    assert f"a {method.upper()} period of the plant needed more than 100 steps" in res.message
     assert "max_steps" in res.message and 'sampled_method = "rk4"' in res.message and "\n" not in res.message
+
+
+def test_sdirk_period_cost_does_not_grow_with_the_damping(tmp_path):
+    """The SDIRK3 periods' cost is set by the motion, not by how fast the friction damps the joint: the
+    rotor of :data:`_ONE_JOINT` with its viscous damping F = 10, 1e3 and 1e5 N m s/rad (time constants
+    I / F = 10 us, 0.1 us, 1 ns; lambda = F / I from 1e5 to 1e9 1/s) under the same FBL run at 500 Hz
+    costs no more right-hand sides per period at F = 1e3 and 1e5 than at F = 10 (measured 15.4, 8.1 and 6.0:
+    Newton's matrix carries the friction's slope, so a stiffer damping converges no slower, and the
+    stiffly accurate stages annihilate the transient), and every period still lands on the closed form of
+    :func:`test_stiff_viscous_plant_period_map_is_the_exponential` (q within 1e-9 rad; measured 5.5e-13,
+    7.2e-11, 7.2e-15)."""
+    counts = []
+    for F in (10.0, 1e3, 1e5):
+        path = tmp_path / f"spinner{F:g}.urdf"
+        path.write_text(_ONE_JOINT.replace('damping="10"', f'damping="{F:g}"'))
+        spec = rc3r.build_run(urdf=str(path), controller="fbl", rate=500.0, duration=0.2, friction="urdf",
+                              engine="fast")
+        res = simulate(spec.true_plant, spec.law, spec.trajectory, spec.options, x0=[0.1, 5.0])
+        assert res.ok and res.options.sampled_method == "sdirk"
+        I, T = 1e-4, 1.0 / 500.0
+        q0, qd0, u = res.q[:-1, 0], res.qd[:-1, 0], res.u[:-1, 0]
+        decay = np.exp(-F * T / I)
+        q1 = q0 + u / F * T + (qd0 - u / F) * (1.0 - decay) * I / F
+        assert np.abs(res.q[1:, 0] - q1).max() <= 1e-9
+        counts.append(res.rhs_evals / (len(res.t) - 1))
+    assert max(counts[1:]) <= counts[0], counts
 
 
 def test_one_joint_arm_regressors_equal_rnea(tmp_path, rng):

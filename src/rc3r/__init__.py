@@ -74,7 +74,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate._fast``                the compiled engine's driver: one instantiation per kernel supply
 ``rc3r.simulate.engines``              engines: the contract and registry, the compiled integrators
 ``rc3r.simulate.engines.base``         the engine contract, the registry (``ENGINES``), the built-in engines
-``rc3r.simulate.engines.compiled``     Rosenbrock (ode23s, ROS4, RODAS) and ZOH (RK4 or ROS4 periods) integrators, any n, p (numba)
+``rc3r.simulate.engines.compiled``     Rosenbrock (ode23s, ROS4, RODAS) and ZOH (RK4, RODAS or ROS4 periods) integrators, any n, p (numba)
 ``rc3r.simulate.engines._template``    the kernel supply contract, as stubs
 ``rc3r.simulate.engines._linalg``      dense LU of the compiled integrators (kernel-independent)
 ``rc3r.simulate.engines._jacobian``    the closed loop's analytic Jacobian by the chain rule (kernel-independent)

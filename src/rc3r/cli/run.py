@@ -54,9 +54,10 @@ def announce_engine(spec) -> str | None:
     if opt.rate is not None and opt.nsub is None:
         lam = stiffness(plant)
         nsub = default_substeps(plant, opt.rate, lam)
-        if plant_method(plant, opt, lam) == "ros4":
+        method = plant_method(plant, opt, lam)
+        if method in ("sdirk", "ros4", "rodas"):
             _progress(f"rc3r: stiff friction (it damps a joint at up to {lam:.3g} 1/s): the plant is advanced by "
-                      f"adaptive L-stable ROS4 steps per period instead of {nsub} RK4 sub-steps "
+                      f"adaptive L-stable {method.upper()} steps per period instead of {nsub} RK4 sub-steps "
                       "([simulation] sampled_method)")
         elif nsub > STIFF_NOTE_SUBSTEPS:
             _progress(f"rc3r: stiff friction (it damps a joint at up to {lam:.3g} 1/s): {nsub} RK4 "

@@ -77,7 +77,7 @@ MAX_ROWS = 5_000_000
 METHODS = {"ros4": 1, "ode23s": 0, "rodas": 2}
 
 #: Ways of advancing the plant over a sampling period (:attr:`SimOptions.sampled_method`).
-SAMPLED_METHODS = ("auto", "rk4", "ros4")
+SAMPLED_METHODS = ("auto", "rk4", "ros4", "rodas", "sdirk")
 
 #: Most controller samples of a sampled run (1e9 samples take hours even compiled).
 MAX_SAMPLES = 1_000_000_000
@@ -105,7 +105,8 @@ class SimOptions:
     rtol, atol : float
         Integrator tolerances (continuous mode), mixed relative/absolute per state.
     period_rtol, period_atol : float
-        Tolerances of the ROS4 periods (``sampled_method = "ros4"``): 1e-4 and 1e-6, because ROS4's
+        Tolerances of the implicit periods (``sampled_method`` ``"sdirk"``, ``"ros4"``, ``"rodas"``): 1e-4
+        and 1e-6, set for ROS4, because ROS4's
         embedded estimate is not L-stable and counts a damped transient as error, so the measured
         error is far below them (within 4.5e-9 rad of the reference engine over 0.3 s of the robust
         law on the xArm7 and the Z1 with their URDF friction, 5.5-6.7x fewer right-hand sides than
@@ -115,13 +116,15 @@ class SimOptions:
         from the plant (:func:`default_substeps`: steps of at most 1 ms for a rigid body, 0.25 ms
         with friction); :attr:`substeps` alone, without a plant, is the conservative
         ``ceil(T / 0.25 ms)``.
-    sampled_method : {"auto", "rk4", "ros4"}
+    sampled_method : {"auto", "rk4", "sdirk", "ros4", "rodas"}
         How the plant is advanced over a sampling period under the held torque (sampled mode).
-        ``"rk4"``: :attr:`nsub` classical RK4 sub-steps. ``"ros4"``: adaptive L-stable Rosenbrock
-        steps at ``period_rtol``, ``period_atol`` (fast engine: ROS4, a Jacobian per step; python engine: SciPy's
-        Radau), for plants whose friction damps a light joint faster than RK4 can follow (the
-        xArm7's URDF damping: 738 sub-steps per 2 ms period). ``"auto"`` (default): ``"ros4"``
-        when ``nsub`` is not given and :func:`stiffness` limits the RK4 step below
+        ``"rk4"``: :attr:`nsub` classical RK4 sub-steps. ``"sdirk"``, ``"ros4"``, ``"rodas"``: adaptive
+        L-stable steps at ``period_rtol``, ``period_atol``, for plants whose friction damps a light joint
+        faster than RK4 can follow (the xArm7's URDF damping: 738 sub-steps per 2 ms period). Fast engine:
+        ``"sdirk"`` Alexander's SDIRK3 with Newton's method on the friction (its slope at every iterate,
+        M^-1 once per period), ``"ros4"`` and ``"rodas"`` Rosenbrock steps with a forward-difference
+        Jacobian per step; python engine: SciPy's Radau for all three, the reference path. ``"auto"``
+        (default): ``"sdirk"`` when ``nsub`` is not given and :func:`stiffness` limits the RK4 step below
         :data:`EFFECT_SUBSTEP_S`, else ``"rk4"`` (:func:`plant_method`).
     engine : {"auto", "fast", "python", "reference"}
     jac_reuse : int
@@ -359,8 +362,8 @@ def _message(status: int, t_end: float, opt: SimOptions, law=None) -> str:
     if status == S.INTERRUPTED:
         return f"interrupted at t = {t_end:.6g} s (Ctrl-C or SIGTERM); the data up to then is kept"
     if status == S.WORK and opt.rate is not None:
-        return (f"stopped at t = {t_end:.6g} s: a ROS4 period of the plant needed more than {period_budget(opt)} "
-                "steps (a stiff plant: raise [simulation] max_steps, or sampled_method = \"rk4\")")
+        return (f"stopped at t = {t_end:.6g} s: a {opt.sampled_method.upper()} period of the plant needed more than "
+                f"{period_budget(opt)} steps (a stiff plant: raise [simulation] max_steps, or sampled_method = \"rk4\")")
     if status == S.WORK:
         eps = getattr(law, "eps", None)
         if eps is None and getattr(law, "eps_i", None) is not None:

@@ -48,6 +48,11 @@ __all__ = ["CompiledSimulator", "simulator", "instantiate", "run", "CHUNK_S", "H
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
 
+#: :attr:`SimOptions.sampled_method` (resolved) -> the ``stiff`` code of
+#: :func:`rc3r.simulate.engines.compiled.integrate_sampled` (its ``RK4_PERIODS``, ``ROS4_PERIODS``,
+#: ``RODAS_PERIODS``).
+PERIOD_METHODS = {"rk4": 0, "ros4": 1, "rodas": 2, "sdirk": 3}
+
 #: Largest continuous-time step [s]; the stored rows are interpolated inside the steps.
 HMAX = 0.001
 
@@ -224,12 +229,13 @@ class CompiledSimulator:
                                                   hmax, lim, X, U, R, yn, jac_reuse, max_steps, int(method))
 
     def sampled(self, rigid, fx, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv, noise, quant,
-                ubuf, kc=None, stiff=False, rtol=1e-6, atol=1e-8, budget=1000):
-        """``stiff``: advance the plant by adaptive ROS4 steps (``rtol``, ``atol``, at most ``budget`` per
-        period) instead of ``nsub`` RK4 sub-steps (``SimOptions.sampled_method``)."""
+                ubuf, kc=None, stiff=0, rtol=1e-6, atol=1e-8, budget=1000):
+        """``stiff``: a code of :data:`PERIOD_METHODS` (``SimOptions.sampled_method``): 0 advances the plant by
+        ``nsub`` RK4 sub-steps, 1 by adaptive ROS4 steps and 2 by adaptive RODAS steps (``rtol``, ``atol``, at
+        most ``budget`` per period)."""
         kc = self.constants(rigid) if kc is None else kc
         return self.instance.integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, code, cp,
-                                               tp, lim, X, U, R, yn, tv, noise, quant, ubuf, bool(stiff),
+                                               tp, lim, X, U, R, yn, tv, noise, quant, ubuf, int(stiff),
                                                float(rtol), float(atol), int(budget))
 
 
@@ -312,7 +318,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     quant = loop.quantization if loop is not None else np.zeros(n)
     ubuf = np.zeros(((loop.delay if loop is not None else 0) + 1, n))  # the delay line, across chunks
     per = max(1, int(round(CHUNK_S * opt.rate)) // dec) * dec  # samples per call, a multiple of dec
-    stiff = opt.sampled_method == "ros4"
+    stiff = PERIOD_METHODS[opt.sampled_method]
     budget = period_budget(opt)
     s0, row, stored, st, t_end, nrhs_all, done = 0, 0, 0, S.OK, 0.0, 0, 0
     try:

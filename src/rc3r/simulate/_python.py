@@ -8,7 +8,8 @@ loop's effects (:mod:`rc3r.plants.loop`) and its torque goes through their delay
 body with an ``advance(q, qd, u, T)`` method (MuJoCo, :mod:`rc3r.plants.mujoco`) integrates
 the held torque itself (its own RK4 at a fine step) instead of this module's RK4. ``python``: SciPy ``Radau`` at the options'
 tolerances (continuous) or RK4 with ``nsub`` sub-steps per period (sampled; SciPy's Radau per period
-for ``SimOptions.sampled_method = "ros4"``, a stiff plant).
+for ``SimOptions.sampled_method`` ``"sdirk"``, ``"ros4"`` or ``"rodas"``, a stiff plant: the reference path the
+compiled engine's implicit periods are compared with).
 ``reference``: ``Radau`` at ``rtol <= 1e-11`` (continuous) or ``DOP853`` per period
 (sampled).
 """
@@ -143,7 +144,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
                 q1, qd1 = advance(x[:n], x[n:2 * n], u, Ts)  # simulate() refused joint-torque effects
                 xs = np.concatenate([q1, qd1])
                 ok = bool(np.all(np.isfinite(xs)))
-            elif reference or opt.sampled_method == "ros4":
+            elif reference or opt.sampled_method in ("ros4", "rodas", "sdirk"):
                 from scipy.integrate import solve_ivp  # here: importing SciPy's integrators costs ~1 s
 
                 sol = solve_ivp(lambda _t, y: ctl.plant_rhs(y, u), (t, t + Ts), x[:2 * n],

@@ -4,7 +4,7 @@ in continuous mode, which Rosenbrock method the fast engine uses (:func:`continu
 
 :func:`default_substeps` chooses RK4 sub-steps from the rigid body and its effects (:func:`stiffness`:
 the fastest rate at which the effects damp a joint); :func:`plant_method` resolves ``"auto"`` to
-adaptive ROS4 periods where that stiffness would make RK4 costly; :func:`rc3r.simulate.simulate`
+adaptive SDIRK3 periods where that stiffness would make RK4 costly; :func:`rc3r.simulate.simulate`
 applies both (``_resolve_steps``) and redoes a run on finer steps when it moved too fast for the
 longer one (``_too_fast``). Measurements behind each constant are in its comment and in
 docs/control.md, "Simulation".
@@ -50,18 +50,21 @@ def _too_fast(res, opt) -> bool:
 
 def plant_method(plant, options, lam: float | None = None) -> str:
     """The resolved :attr:`SimOptions.sampled_method` of a sampled run on ``plant``: the option itself
-    unless ``"auto"``; then ``"ros4"`` if ``options.nsub`` is None and the effects' damping
+    unless ``"auto"``; then ``"sdirk"`` if ``options.nsub`` is None and the effects' damping
     (:func:`stiffness`) limits an RK4 sub-step below :data:`EFFECT_SUBSTEP_S` (``STIFF_STEP / lambda``
     shorter than it), else ``"rk4"``; ``"rk4"`` in continuous mode (unused there). Measured with
     ``benchmarks/stiff_plant.py`` (docs/control.md, "Simulation"): on the xArm7's URDF friction ROS4
-    makes 8.8-19x fewer right-hand sides than RK4 at 1 kHz and 500 Hz, on the Z1's 1.6-3.5x, at the
-    same distance from the reference engine. ``lam``: :func:`stiffness` of ``plant`` if already known."""
+    periods make 8.8-19x fewer right-hand sides than RK4 at 1 kHz and 500 Hz, on the Z1's 1.6-3.5x, at
+    the same distance from the reference engine; SDIRK3 periods with Newton on the friction cost 2.0x
+    (Z1) to 3.2x (xArm7) less per period than ROS4's at the same tolerances, RODAS periods 1.3x and 3.1x
+    (``benchmarks/period_methods.py``, docs/performance.md, "Stiff friction: the sampled periods").
+    ``lam``: :func:`stiffness` of ``plant`` if already known."""
     if options.sampled_method != "auto":
         return options.sampled_method
     if options.rate is None or options.nsub is not None:
         return "rk4"
     lam = stiffness(plant) if lam is None else lam
-    return "ros4" if lam > 0 and STIFF_STEP / lam < EFFECT_SUBSTEP_S else "rk4"
+    return "sdirk" if lam > 0 and STIFF_STEP / lam < EFFECT_SUBSTEP_S else "rk4"
 
 
 def continuous_method(law, options):
@@ -143,6 +146,6 @@ def _steps(rate: float, h: float) -> int:
 
 
 def period_budget(options) -> int:
-    """Most ROS4 steps one sampling period may take (``sampled_method = "ros4"``): ``max_steps`` per
-    simulated second, at least 100."""
+    """Most implicit steps one sampling period may take (``sampled_method`` ``"sdirk"``, ``"ros4"``, ``"rodas"``):
+    ``max_steps`` per simulated second, at least 100."""
     return max(100, int(np.ceil(options.max_steps / float(options.rate))))

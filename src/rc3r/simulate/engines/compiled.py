@@ -9,8 +9,10 @@ r"""The compiled engine's integrators, written once for any n and p (numba): a t
   analytic where the kernel supply has derivatives (:func:`_tangent_jacobian`), else by forward
   differences (:func:`_jacobian`). Other stored rows are cubic Hermite interpolants.
 * :func:`integrate_sampled` -- a digital controller: u computed at t_k = k T and held; the plant is
-  integrated over each period by RK4 with ``nsub`` sub-steps, or for a stiff plant by adaptive ROS4
-  steps on the plant alone (:func:`_stiff_period`); the controller state by forward Euler.
+  integrated over each period by RK4 with ``nsub`` sub-steps, or for a stiff plant (friction on a light
+  joint) by adaptive SDIRK3 steps with Newton on the friction (:func:`_sdirk_period`, the default), RODAS
+  steps (:func:`_rodas_period`) or ROS4 steps (:func:`_stiff_period`) on the plant alone; the controller
+  state by forward Euler.
 
 Effects (``fx`` of :meth:`rc3r.plants.Plant.pack`, the loop's noise, quantization, delay) are applied by
 :mod:`rc3r.plants._kernels`; the law by :mod:`rc3r.controllers._kernels` (its integer code). The robot
@@ -436,6 +438,214 @@ def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a
     return OK, nf
 
 
+#: Alexander's SDIRK3 (SIAM J. Numer. Anal. 14 (1977); Hairer & Wanner II, IV.6, Table 6.5): L-stable and
+#: stiffly accurate, order 3 in 3 implicit stages of diagonal gamma; the embedded order-2 weights (b^_3 = 0)
+#: use the first two stages. Rows: (c_i, a_i1, a_i2, a_i3); the last row is b (the third stage).
+_SG = 0.4358665215084590
+_SDIRK3 = np.array([
+    [_SG, _SG, 0.0, 0.0],
+    [(1.0 + _SG) / 2.0, (1.0 - _SG) / 2.0, _SG, 0.0],
+    [1.0, -(6.0 * _SG * _SG - 16.0 * _SG + 1.0) / 4.0, (6.0 * _SG * _SG - 20.0 * _SG + 5.0) / 4.0, _SG]])
+_SDIRK3_BHAT = np.array([1.0 - (1.0 - 2.0 * _SG) / (1.0 - _SG), (1.0 - 2.0 * _SG) / (1.0 - _SG), 0.0])
+#: Newton iterations of one SDIRK stage before the step is rejected and halved (:func:`_sdirk_period`).
+_NEWTON_MAX = 10
+
+
+@njit(**dict(_JIT, inline="always"))
+def _newton_matrix(fx, qd, hg, Mi, N, piv):
+    """``N = I + hg M0^-1 diag(phi'(qd))`` (n, n), LU-factored in place: the friction block of the SDIRK
+    stage's Newton matrix (``phi`` the friction torque of ``fx``, ``phi' = F_v + F_c / v_s sech^2(qd / v_s)``,
+    ``Mi`` = M^-1 at the step's start). False if singular."""
+    n = qd.shape[0]
+    vs = fx[3 * n]
+    for j in range(n):
+        th = math.tanh(qd[j] / vs)
+        d = hg * (fx[j] + fx[n + j] * (1.0 - th * th) / vs)
+        for i in range(n):
+            N[i, j] = Mi[i, j] * d + (1.0 if i == j else 0.0)
+    return _lu_factor(N, piv)
+
+
+@njit(**_JIT)
+def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, atol, budget):
+    """Advance the plant ``x = (q, qd)`` (2n,) in place over one period ``Ts`` under the held torque ``ua`` by
+    adaptive steps of Alexander's SDIRK3 (:data:`_SDIRK3`), each stage solved by Newton's method on the
+    friction: the Newton matrix is ``[[I, -h g I], [0, I + h g M0^-1 phi'(qd)]]`` with the friction's slope
+    ``phi'`` at the current iterate (so the smooth Coulomb knee, nonlinear at the scale v_s, is solved, not
+    linearized) and ``M0^-1`` the inverse mass matrix at the period's start, by ``n`` forward dynamics (the
+    forward dynamics is affine in the torque: ``M^-1 e_j = fd(tau0 + e_j) - fd(tau0)``; M moves by a part in
+    1e3 over a 1 ms period, which slows the iteration by that factor). The rigid body's
+    own slopes (gravity, Coriolis) are left out of it: they slow the iteration by a factor ~ (h g)^2 |dqdd/dq|,
+    not by the damping. So a period costs ``n + 1`` right-hand sides plus one per Newton iteration (about two
+    per stage), whatever the friction's stiffness. A stage has converged when Newton's update is below 1e-3
+    of the tolerances' scale (that scale never under 1e-12 (1 + |x|), so tolerances below rounding end in
+    the step budget, not in a stall); it is rejected after :data:`_NEWTON_MAX` iterations. The error
+    estimate (embedded order 2) is filtered by the Newton matrix, as RADAU5's
+    (Hairer & Wanner IV.8), so a damped transient does not count as error. ``hs[0]``: the step to try, carried
+    from period to period. ``V`` (10, 2n), ``Mi``, ``N`` (n, n), ``piv`` (n,): scratch. At most ``budget``
+    steps. Returns ``(status, n_f)``."""
+    n2 = x.shape[0]
+    n = n2 // 2
+    F0, Y, base, Fs, err, xnew = V[0], V[1], V[2], V[3:6], V[6], V[7]
+    col = V[8][0:n]
+    sc = V[9]
+    if not _plant_rhs(x, ua, kc, wk, fx, fric, F0, tau):
+        return NOTPD, 1
+    nf, steps, t = 1, 0, 0.0
+    g = _SG
+    # M0^-1 by columns: the joint torque of x plus a unit torque on joint j, less F0 (fd is affine in tau)
+    _joint_torque(fx, fric, x[n:n2], ua, tau)
+    for j in range(n):
+        s_ = max(1.0, abs(tau[j]))
+        tau[j] += s_
+        ok = _fd(kc, x[0:n], x[n:n2], tau, col, wk)
+        tau[j] -= s_
+        if not ok:
+            return NOTPD, nf
+        for i in range(n):
+            Mi[i, j] = (col[i] - F0[n + i]) / s_
+    nf += n
+    while t < Ts * (1.0 - 1e-12):
+        h = min(hs[0], Ts - t)
+        cut = h < hs[0]
+        while True:
+            steps += 1
+            if steps > budget:
+                return WORK, nf
+            hg = h * g
+            good = True
+            for st in range(3):
+                for i in range(n2):
+                    acc = x[i]
+                    for j in range(st):
+                        acc += h * _SDIRK3[st, 1 + j] * Fs[j, i]
+                    base[i] = acc
+                    Y[i] = acc + hg * (F0[i] if st == 0 else Fs[st - 1, i])  # the last slope as the guess
+                conv = False
+                for it in range(_NEWTON_MAX):
+                    if not _plant_rhs(Y, ua, kc, wk, fx, fric, xnew, tau):
+                        good = False
+                        break
+                    nf += 1
+                    if not _newton_matrix(fx, Y[n:n2], hg, Mi, N, piv):
+                        good = False
+                        break
+                    for i in range(n):  # residual R = Y - base - hg f(Y); dqd = -N^-1 R_qd, dq = -R_q + hg dqd
+                        col[i] = -(Y[n + i] - base[n + i] - hg * xnew[n + i])
+                    _lu_solve(N, piv, col)
+                    dn = 0.0
+                    for i in range(n):
+                        dq = -(Y[i] - base[i] - hg * xnew[i]) + hg * col[i]
+                        Y[i] += dq
+                        Y[n + i] += col[i]
+                        a0 = dq / (atol + rtol * abs(Y[i]) + 1e-12 * (1.0 + abs(Y[i])))  # never below rounding
+                        a1 = col[i] / (atol + rtol * abs(Y[n + i]) + 1e-12 * (1.0 + abs(Y[n + i])))
+                        dn += a0 * a0 + a1 * a1
+                    if math.sqrt(dn / n2) <= 1e-3:
+                        conv = True
+                        break
+                if not (good and conv):
+                    good = False
+                    break
+                for i in range(n2):  # the stage's slope from the solved equation (exact at convergence)
+                    Fs[st, i] = (Y[i] - base[i]) / hg
+            e = 1e300
+            if good:
+                for i in range(n2):
+                    xnew[i] = Y[i]  # stiffly accurate: the solution is the last stage
+                    acc = 0.0
+                    for j in range(3):
+                        acc += (_SDIRK3[2, 1 + j] - _SDIRK3_BHAT[j]) * Fs[j, i]
+                    err[i] = h * acc
+                # filter by the Newton matrix at the new state: N de_qd = e_qd, de_q = e_q + hg de_qd
+                if _newton_matrix(fx, xnew[n:n2], hg, Mi, N, piv):
+                    _lu_solve(N, piv, err[n:n2])
+                    e = 0.0
+                    for i in range(n):
+                        err[i] += hg * err[n + i]
+                    for i in range(n2):
+                        sc[i] = err[i] / (atol + rtol * max(abs(x[i]), abs(xnew[i])))
+                        e += sc[i] * sc[i]
+                    e = math.sqrt(e / n2)
+            if not (e <= 1e300):
+                e = 1e300
+            if e <= 1.0:
+                break
+            cut = False
+            h = h * max(0.1, 0.8 * (1.0 / max(e, 1e-300)) ** (1.0 / 3.0)) if e < 1e300 else 0.5 * h
+            if h < 1e-14 * Ts:
+                return HMIN, nf
+        t = Ts if cut else t + h
+        for i in range(n2):
+            x[i] = xnew[i]
+            F0[i] = Fs[2, i]  # the last stage's slope: f at the new state, to the Newton tolerance
+        hn = h * (5.0 if e == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / e) ** (1.0 / 3.0))))
+        hs[0] = max(hs[0], hn) if cut else hn
+    return OK, nf
+
+
+#: ``stiff`` codes of :func:`integrate_sampled` (:data:`rc3r.simulate.SAMPLED_METHODS` names them): RK4
+#: sub-steps, adaptive ROS4 periods (:func:`_stiff_period`), adaptive RODAS periods (:func:`_rodas_period`),
+#: adaptive SDIRK3 periods with Newton on the friction (:func:`_sdirk_period`).
+RK4_PERIODS, ROS4_PERIODS, RODAS_PERIODS, SDIRK_PERIODS = 0, 1, 2, 3
+#: Accepted RODAS steps of a period one forward-difference Jacobian is kept for (:func:`_rodas_period`).
+PERIOD_JAC_REUSE = 1
+
+
+@njit(**_JIT)
+def _rodas_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V, J, W, piv,
+                  rtol, atol, budget, tw, jac_reuse):
+    """Advance the plant ``x = (q, qd)`` (2n,) in place over one period ``Ts`` under the held torque ``ua`` by
+    adaptive RODAS steps (:func:`_rosenbrock_stages` on the plant alone, table ``RODAS``): L-stable and stiffly
+    accurate, with an error estimate that is itself stiffly accurate (it vanishes on a damped transient, where
+    ROS4's counts it as error), so the steps are set by the motion, not by how fast the friction damps a joint.
+    A forward-difference Jacobian is kept ``jac_reuse`` accepted steps and refreshed after a step rejected with
+    an older one (as :func:`integrate_continuous`); ``hs[0]``: the step to try, carried from period to period.
+    ``V`` (13, 2n), ``J``, ``W`` (2n, 2n), ``piv``: scratch. At most ``budget`` steps. Returns ``(status, n_f)``."""
+    F0, F1, F2, Ft, Fp = V[0], V[1], V[2], V[3], V[4]
+    K, tmp, xnew = V[5:11], V[11], V[12]
+    if not _plant_rhs(x, ua, kc, wk, fx, fric, F0, tau):
+        return NOTPD, 1
+    nf, steps, t, err = 1, 0, 0.0, 0.0
+    age = jac_reuse
+    while t < Ts * (1.0 - 1e-12):
+        h = min(hs[0], Ts - t)
+        cut = h < hs[0]
+        if age >= jac_reuse:
+            nf += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, ua, ref, Y, xi, v, a, r, tau, ys, tw,
+                            _ON[0], not _ON[0])
+            age = 0
+        while True:
+            steps += 1
+            if steps > budget:
+                return WORK, nf
+            st_, err, m = _rosenbrock_stages(_RODAS, t, x, h, F0, Ft, J, W, piv, kc, wk, fx, fric, law, cp, tp, F1,
+                                             F2, ua, ref, Y, xi, v, a, r, tau, ys, K, tmp, xnew, rtol, atol, True)
+            nf += m
+            if st_ == 2:
+                return HMIN, nf
+            if not (err <= 1e300):
+                err = 1e300
+            if st_ == 0 and err <= 1.0:
+                break
+            cut = False
+            if age > 0:
+                nf += _jacobian(t, x, F0, kc, wk, fx, fric, law, cp, tp, J, Ft, Fp, ua, ref, Y, xi, v, a, r, tau, ys,
+                                tw, _ON[0], not _ON[0])
+                age = 0
+            h = h * max(0.1, 0.8 * (1.0 / max(err, 1e-300)) ** 0.25) if err < 1e300 else 0.1 * h
+            if h < 1e-14 * Ts:
+                return HMIN, nf
+        age += 1
+        t = Ts if cut else t + h
+        for i in range(x.shape[0]):
+            x[i] = xnew[i]
+            F0[i] = F2[i]
+        hn = h * (5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * (1.0 / err) ** 0.25)))
+        hs[0] = max(hs[0], hn) if cut else hn
+    return OK, nf
+
+
 @njit(**_JIT)
 def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
                       X, U, R, ynorm, tv, noise, quant, ubuf, stiff, rtol, atol, budget):
@@ -448,8 +658,9 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     command of sample k - d, or of sample 0 while k < d) and the actuator effects of ``fx``.
     The stored ``U`` is the delivered torque; the |u| bound is checked on the command.
     ``tv`` (n,) accumulates the total variation of the delivered torque over all samples.
-    The plant is advanced over a period by ``nsub`` RK4 sub-steps, or if ``stiff`` by
-    :func:`_stiff_period` (tolerances ``rtol``, ``atol``, at most ``budget`` steps per period).
+    The plant is advanced over a period by ``nsub`` RK4 sub-steps (``stiff`` = :data:`RK4_PERIODS`), or by
+    :func:`_stiff_period` (:data:`ROS4_PERIODS`) or :func:`_rodas_period` (:data:`RODAS_PERIODS`) at the
+    tolerances ``rtol``, ``atol``, at most ``budget`` steps per period.
     Returns ``(status, n_stored, n_rhs, n_samples_done, t_end)``.
     """
     n = x0.shape[0]
@@ -468,8 +679,9 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     qm = np.empty(nj); qdm = np.empty(nj); ua = np.empty(nj); tau = np.empty(nj)
     nd = ubuf.shape[0]  # delay + 1
     h = Ts / nsub
-    V = np.empty((11, n2)); J = np.empty((n2, n2)); W = np.empty((n2, n2)); piv = np.zeros(n2, dtype=np.int64)
+    V = np.empty((13, n2)); J = np.empty((n2, n2)); W = np.empty((n2, n2)); piv = np.zeros(n2, dtype=np.int64)
     hs = np.full(1, Ts); ys = np.empty(1)
+    Mi = np.empty((nj, nj)); Nw = np.empty((nj, nj)); pivn = np.zeros(nj, dtype=np.int64)
     xp = x[0:n2]  # the plant's part of x, advanced in place
     nrhs = 0
     stored = 0
@@ -498,13 +710,19 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
             return st, stored, nrhs, s, t
         if s == nsamples:
             break
-        if stiff:
-            st, m = _stiff_period(xp, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V,
-                                  J, W, piv, rtol, atol, budget, tw)
+        if stiff != RK4_PERIODS:
+            if stiff == ROS4_PERIODS:
+                st, m = _stiff_period(xp, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V,
+                                      J, W, piv, rtol, atol, budget, tw)
+            elif stiff == RODAS_PERIODS:
+                st, m = _rodas_period(xp, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V,
+                                      J, W, piv, rtol, atol, budget, tw, PERIOD_JAC_REUSE)
+            else:
+                st, m = _sdirk_period(xp, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, Nw, pivn, rtol, atol, budget)
             nrhs += m
             if st != OK:
                 return st, stored, nrhs, s, t
-        for sub in range(0 if stiff else nsub):
+        for sub in range(0 if stiff != RK4_PERIODS else nsub):
             ok = _plant_rhs(x, ua, kc, wk, fx, fric, k1, tau)
             for i in range(n2):
                 xs[i] = x[i] + 0.5 * h * k1[i]
