@@ -71,9 +71,16 @@ def test_only_the_cli_prints_parses_and_exits(path):
     assert not bad, f"{_rel(path)} calls {bad}"
 
 
+#: Modules allowed past 540 lines, each with its own cap and the reason. The compiled engine is one
+#: template text that rc3r.simulate._fast instantiates per kernel supply (its import line rewritten), so its
+#: functions cannot move to another file until the instantiation takes several templates (issue 34's
+#: "one home per compiled part"); issue 37 added its SDIRK3 and RODAS periods there.
+LARGE = {"simulate/engines/compiled.py": 760}
+
+
 @pytest.mark.parametrize("path", MODULES, ids=_rel)
 def test_modules_stay_small(path):
-    assert len(path.read_text().splitlines()) <= 540
+    assert len(path.read_text().splitlines()) <= LARGE.get(_rel(path), 540)
 
 
 def _is_attribute(dotted: str) -> bool:

@@ -37,13 +37,12 @@ A run that leaves its bounds (NaN, ``|q| > q_max``, ``|qd| > qd_max``,
 to then, its ``outcome``/``message`` say when and why, and
 :meth:`SimResult.raise_for_status` raises :class:`~rc3r.errors.DivergenceError`.
 
-What a run means is its **verdict** (:attr:`SimResult.verdict`, :mod:`rc3r.simulate.verdict`):
-``clean``, ``chattering``, ``saturated``, ``limit-violated``, ``diverged`` (or ``interrupted``),
-the same word ``rc3r run``, ``rc3r paper``, the campaigns and ``metrics.json`` print.
-:attr:`SimResult.outcome` is only how the integration ended (``finished``, ``diverged``,
-``interrupted``: a chattering run has finished). ``SimResult.status`` (``"ok"`` for a finished
-run, also a chattering one) is a deprecated alias of ``outcome`` in its old words; the files
-keep their ``status`` field in those words (:func:`file_status`) for their existing readers.
+What a run means is its **verdict** (:attr:`SimResult.verdict`, :mod:`rc3r.simulate.verdict`): ``clean``,
+``chattering``, ``saturated``, ``limit-violated``, ``diverged`` (or ``interrupted``), the word ``rc3r run``,
+``rc3r paper``, the campaigns and ``metrics.json`` print. :attr:`SimResult.outcome` is only how the
+integration ended (``finished``, ``diverged``, ``interrupted``: a chattering run has finished);
+``SimResult.status`` (``"ok"`` for any finished run) is its deprecated alias in the old words, which the
+files keep in their ``status`` field (:func:`file_status`) for their existing readers.
 """
 from __future__ import annotations
 
@@ -105,12 +104,11 @@ class SimOptions:
     rtol, atol : float
         Integrator tolerances (continuous mode), mixed relative/absolute per state.
     period_rtol, period_atol : float
-        Tolerances of the implicit periods (``sampled_method`` ``"sdirk"``, ``"ros4"``, ``"rodas"``): 1e-4
-        and 1e-6, set for ROS4, because ROS4's
-        embedded estimate is not L-stable and counts a damped transient as error, so the measured
-        error is far below them (within 4.5e-9 rad of the reference engine over 0.3 s of the robust
-        law on the xArm7 and the Z1 with their URDF friction, 5.5-6.7x fewer right-hand sides than
-        at 1e-6 / 1e-8; ``benchmarks/stiff_plant.py``, docs/control.md).
+        Tolerances of the implicit periods (``sampled_method`` ``"sdirk"``, ``"ros4"``, ``"rodas"``): 1e-4 and
+        1e-6, set for ROS4, whose embedded estimate is not L-stable and counts a damped transient as error, so
+        the measured error is far below them (within 4.5e-9 rad of the reference engine over 0.3 s of the
+        robust law on the xArm7 and the Z1 with their URDF friction, 5.5-6.7x fewer right-hand sides than at
+        1e-6 / 1e-8; ``benchmarks/stiff_plant.py``, docs/control.md).
     nsub : int or None
         RK4 sub-steps per sampling period (sampled mode); default: chosen by :func:`simulate`
         from the plant (:func:`default_substeps`: steps of at most 1 ms for a rigid body, 0.25 ms
@@ -128,11 +126,10 @@ class SimOptions:
         :data:`EFFECT_SUBSTEP_S`, else ``"rk4"`` (:func:`plant_method`).
     engine : {"auto", "fast", "python", "reference"}
     jac_reuse : int
-        Fast engine, continuous mode: accepted Rosenbrock steps one finite-difference
-        Jacobian is kept for (it is refreshed at once after a step rejected with an
-        older one). 1 = every step (MATLAB's ode23s). The default 5 makes the FBL
-        runs about 2x faster and the robust runs 1.0-1.3x, at the same accuracy against
-        a tight SciPy Radau solution (``rc3r bench``, docs/performance.md).
+        Fast engine, continuous mode: accepted Rosenbrock steps one finite-difference Jacobian is kept
+        for (refreshed at once after a step rejected with an older one). 1 = every step (MATLAB's
+        ode23s). The default 5 makes the FBL runs about 2x faster and the robust runs 1.0-1.3x, at the
+        same accuracy against a tight SciPy Radau solution (``rc3r bench``, docs/performance.md).
     method : {"auto", "ode23s", "ros4", "rodas"}
         Fast engine, continuous mode: the Rosenbrock method (:data:`METHODS`). ``"ode23s"``:
         Shampine & Reichelt's order-2 pair (MATLAB's ode23s); ``"ros4"``: Hairer & Wanner's L-stable
