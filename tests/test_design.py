@@ -379,7 +379,8 @@ def test_scheduled_k_lifts_the_bandwidth_a_constant_k_caps():
 # ---- design.toml survives a new venv, a moved project, another machine (issue 33 item 5) ----------
 
 def _write_design(cfg: dict, directory) -> str:
-    """design.toml of a design made for ``cfg`` (gains stand in for a verification), written into ``directory``."""
+    """design.toml of a design made for ``cfg`` (gains stand in for a verification), written into ``directory``.
+    Its header says what its ``[design] verified`` says (a verified design's header once claimed the opposite)."""
     from types import SimpleNamespace
 
     from rc3r.design.report import design_toml
@@ -388,6 +389,8 @@ def _write_design(cfg: dict, directory) -> str:
                            gains=lambda: {"robust": {"K": [5.0] * 6, "Lambda": 10.0, "eps": 1.0}},
                            recommendation=lambda: {"law": "robust"})
     text = design_toml(fake, "made by: a test", base=directory)
+    header = " ".join(line[2:] for line in text.splitlines() if line.startswith("# "))
+    assert "[design] verified = true: clean" in header and "verified = false" not in header
     (directory / "design.toml").write_text(text)
     return text
 

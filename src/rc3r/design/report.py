@@ -48,7 +48,9 @@ def design_toml(result, header: str = "", base=None) -> str:
     top = ("Gains and boundary layer for a sampled controller, chosen by rc3r design (docs/design.md).\n"
            f"[controller] kind is the recommended law ({law}{'' if rec else ': NOT verified'}): rc3r run, montecarlo "
            "and export --config design.toml run it;\n--controller robust|robust-coeff|adaptive|fbl|pd runs "
-           "another law of [gains]. [design] verified = false: no robust law was clean (design.md says why).")
+           "another law of [gains]. " + ("[design] verified = true: clean on every plant tried (design.md)."
+                                          if cfg["design"]["verified"] else
+                                          "[design] verified = false: no robust law was clean (design.md says why)."))
     return to_toml(cfg, top + ("\n" + header if header else ""))
 
 
