@@ -96,6 +96,7 @@ def test_the_ur5_animates_from_its_own_model(ur5):
     assert drawn.shape == (model.njoints + 1, 3)
 
 
+@pytest.mark.slow
 def test_rc3r_run_animate_writes_a_gif_of_25_frames_per_second(tmp_path, capsys):
     """2 s of the robust law: animation.gif has 50 frames of 40 ms (PIL counts them), metrics.json says
     so, the announce line names the animation, no temporary file is left, the backend is untouched."""

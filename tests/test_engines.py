@@ -61,6 +61,7 @@ def _supply_calls(fd, reg, make_work, kc, q, qd, v, a, tau, Y, qdd):
     return fd(kc, q, qd, tau, qdd, wk)
 
 
+@pytest.mark.slow
 def test_chain_supply_entry_points_equal_the_robot(ur5, rng):
     """The supply's regressor_into (base-parameter columns) equals Pinocchio's two-regressor reference path
     (1e-12 relative), and forward_dynamics_into on a payload plant's constants equals that plant's

@@ -111,6 +111,7 @@ def test_analytic_jacobian_equals_central_differences(case, plant, rng):
         assert np.any(xi <= eps) and np.any(xi > eps), xi
 
 
+@pytest.mark.slow
 def test_a_scheduled_gain_falls_back_to_differences():
     """K_inertia > 0 (w -= b M(q) r) is not composed: the analytic Jacobian declines, the engine differences."""
     spec, mod, n, cp, tp, code, kc, fx, x0 = _setup("robust")

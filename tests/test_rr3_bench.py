@@ -21,6 +21,10 @@ from rc3r.robots.rr3 import RR3
 from rc3r.experiments import bench3r as bench
 from rc3r.cli import main
 
+#: One whole `rc3r bench --quick` run for the module (45 s on a loaded machine): in the slow suite; .ci/run
+#: also runs `rc3r bench --quick` itself.
+pytestmark = pytest.mark.slow
+
 REPO = Path(__file__).resolve().parents[1]
 
 
