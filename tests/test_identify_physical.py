@@ -213,6 +213,7 @@ def _shared_panda() -> Path | None:
 PANDA_RMS_TARGETS = (0.33, 0.44, 0.29, 0.46, 0.12, 0.13, 0.07)
 
 
+@pytest.mark.slow  # the real log: a whole identify with cross-validation
 @pytest.mark.skipif(_shared_panda() is None,
                     reason="the real Panda log (GPL-3) is absent: <repo>/../shared/data/panda_gaz or RC3R_SHARED_DATA")
 def test_real_panda_log_gives_a_consistent_plausible_accurate_estimate():

@@ -150,6 +150,7 @@ def test_given_settings_skip_the_search(arm, motion):
     assert res.friction_law["coulomb_velocity"] == 0.0 and res.filter["chosen"] == "given (--filter)"
 
 
+@pytest.mark.slow  # the real log: a whole identify with cross-validation
 def test_panda_log_meets_the_issue_35_targets():
     """The real Panda log, defaults, last 30 % held out: RMS vs logged torque at most 0.33 0.44 0.29 0.46 0.12
     0.13 0.07 N m (issue 35's done-when; plain OLS at 5 Hz: 0.30 0.40 0.26 0.42 0.107 0.117 0.063, SOURCE.md of
