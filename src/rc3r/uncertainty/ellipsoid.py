@@ -319,19 +319,28 @@ def _draw_physical(robot, theta0, P, spec, kind, arg, chart, source):
             raise ParameterError(f"the centre theta_0 of {source} is not simulable: {exc}") from None
         return plant
     P = np.asarray(P, dtype=float)
+    theta0 = np.asarray(theta0, dtype=float)
+
+    def realised(theta):
+        """The plant of the physical link parameters nearest ``theta`` (the chart's Gauss-Newton), or None when
+        they leave the ellipsoid or cannot be simulated."""
+        pi = standard_of(realise_log_cholesky(T, theta, eta0, S, best=True))
+        d = T @ pi - theta0
+        if not d @ P @ d <= 1.0 + 1e-9:
+            return None
+        try:
+            plant = robot.with_standard_parameters(pi, spec)
+            plant.require_simulable()
+            return plant
+        except ParameterError:
+            return None
+
     if kind == "lightest":  # rc3r design's worst plant: the nearest physical point, pulled inside if need be
         target = lightest_theta(robot, theta0, P, arg, spec)
         for f in (1.0, 0.75, 0.5, 0.25):
-            theta = np.asarray(theta0, dtype=float) + f * (target - np.asarray(theta0, dtype=float))
-            pi = standard_of(realise_log_cholesky(T, theta, eta0, S, best=True))
-            d = T @ pi - np.asarray(theta0, dtype=float)
-            if d @ P @ d <= 1.0 + 1e-9:
-                try:
-                    plant = robot.with_standard_parameters(pi, spec)
-                    plant.require_simulable()
-                    return plant
-                except ParameterError:
-                    continue
+            plant = realised(theta0 + f * (target - theta0))
+            if plant is not None:
+                return plant
         raise ParameterError(f"plant {spec!r}: no physical link parameters inside the ellipsoid of {source} "
                              "realise it")
     if kind not in ("random", "boundary"):
@@ -340,18 +349,9 @@ def _draw_physical(robot, theta0, P, spec, kind, arg, chart, source):
 
     rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad plant"))
     for _ in range(MAX_DRAWS):
-        theta = draw_theta(theta0, P, rng, boundary=kind == "boundary")
-        eta = realise_log_cholesky(T, theta, eta0, S, best=True)
-        pi = standard_of(eta)
-        d = T @ pi - np.asarray(theta0, dtype=float)
-        if not d @ P @ d <= 1.0 + 1e-9:  # the nearest physical coefficients reached must lie in the ellipsoid
-            continue
-        try:
-            plant = robot.with_standard_parameters(pi, spec)
-            plant.require_simulable()
+        plant = realised(draw_theta(theta0, P, rng, boundary=kind == "boundary"))
+        if plant is not None:  # the nearest physical coefficients reached lie in the ellipsoid and simulate
             return plant
-        except ParameterError:
-            continue
     raise ParameterError(f"plant {spec!r}: no physical link parameters realise any of {MAX_DRAWS} draws from the "
                          f"ellipsoid of {source}")
 
