@@ -31,7 +31,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
 ``rc3r.robots.pinocchio_supply``       a chain's kernel supply of the compiled engine (Y^T r, Y theta in O(n))
-``rc3r.urdf_names``                   URDF files by name: example-robot-data's directory, ``erd:`` names, --lock advice
+``rc3r.urdf_names``                    URDF files by name: example-robot-data's directory, ``erd:`` names, --lock advice
 ``rc3r.robots.generated``              generated C kernels of any arm (CasADi SX -> C, cached on disk)
 ``rc3r.robots.generated_chain``        what is generated (``FUNCTIONS``) and from what (a chain's constants)
 ``rc3r.robots.generated_sym``          their symbolic recursions and the C batch wrapper
