@@ -1,6 +1,9 @@
 """Assertions shared by the test modules (tests/ is on sys.path under pytest's default import mode)."""
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -69,3 +72,16 @@ def th(arm):
 @pytest.fixture(scope="module")
 def pdata(arm):
     return arm.model.createData()
+
+
+def shared_panda_log() -> Path | None:
+    """The real Franka Panda log (GPL-3, never in this repository), or None: ``$RC3R_SHARED_DATA``, else a
+    ``shared/data`` folder beside the repository, its parent or its grandparent, holding
+    ``panda_gaz/exciting_traj_1.npz``. Tests that need it skip with a reason without it."""
+    repo = Path(__file__).resolve().parents[1]
+    roots = [Path(os.environ["RC3R_SHARED_DATA"])] if os.environ.get("RC3R_SHARED_DATA") else []
+    roots += [up / "shared" / "data" for up in repo.parents[:3]]
+    for root in roots:
+        if (root / "panda_gaz" / "exciting_traj_1.npz").is_file():
+            return root / "panda_gaz" / "exciting_traj_1.npz"
+    return None

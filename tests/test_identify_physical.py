@@ -21,9 +21,6 @@ Properties checked:
 """
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -39,6 +36,8 @@ from rc3r.identify.pipeline import identify
 from rc3r.identify.synthetic import Friction, sample_log, simulate_motion
 from rc3r.robots.pinocchio import PinocchioRobot, example_robot_data_dir
 from rc3r.uncertainty.ellipsoid import draw_from_ellipsoid
+
+from _helpers import shared_panda_log
 
 PENDULUM = "double_pendulum_description/urdf/double_pendulum.urdf"
 
@@ -202,19 +201,12 @@ def test_indefinite_mass_matrix_is_refused_in_one_line(indefinite_ur5, tmp_path,
     assert "not positive definite" in err and "joint 6" in err and f"{low:.3g}" in err, (err, low)
 
 
-def _shared_panda() -> Path | None:
-    root = os.environ.get("RC3R_SHARED_DATA")
-    base = Path(root) if root else Path(__file__).resolve().parents[1].parent / "shared" / "data"
-    path = base / "panda_gaz" / "exciting_traj_1.csv"
-    return path if path.is_file() else None
-
-
 #: Issue 35's targets for the consistent estimate's held-out RMS [N m] on the real Panda log.
 PANDA_RMS_TARGETS = (0.33, 0.44, 0.29, 0.46, 0.12, 0.13, 0.07)
 
 
 @pytest.mark.slow  # the real log: a whole identify with cross-validation
-@pytest.mark.skipif(_shared_panda() is None,
+@pytest.mark.skipif(shared_panda_log() is None,
                     reason="the real Panda log (GPL-3) is absent: <repo>/../shared/data/panda_gaz or RC3R_SHARED_DATA")
 def test_real_panda_log_gives_a_consistent_plausible_accurate_estimate():
     """The defaults (settings by cross-validation), last 30 % held out, the estimate bounds.toml carries
@@ -224,7 +216,7 @@ def test_real_panda_log_gives_a_consistent_plausible_accurate_estimate():
     from rc3r.uncertainty.ellipsoid import require_positive_mass_matrix
 
     panda = rc3r.load_robot("panda")
-    res = identify(panda, load_log(_shared_panda(), n=7), test_fraction=0.3, consistency=False)
+    res = identify(panda, load_log(shared_panda_log(), n=7), test_fraction=0.3, consistency=False)
     pf = res.physical_fit
     assert np.all(_pin_min_eigenvalues(pf.standard) > 0)
     ratio = pf.masses / panda.standard_parameters()[0::10]

@@ -7,7 +7,6 @@ for as ``$RC3R_SHARED_DATA/panda_gaz/exciting_traj_1.npz`` or ``shared/data/pand
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -23,16 +22,9 @@ from rc3r.identify.pipeline import identify
 from rc3r.identify.regressors import coulomb, friction_columns
 from rc3r.identify.synthetic import SensorNoise, sample_log, simulate_motion
 
+from _helpers import shared_panda_log
+
 REPO = Path(__file__).resolve().parents[1]
-
-
-def _panda_log() -> Path | None:
-    roots = [Path(os.environ["RC3R_SHARED_DATA"])] if os.environ.get("RC3R_SHARED_DATA") else []
-    roots += [up / "shared" / "data" for up in REPO.parents[:3]]
-    for root in roots:
-        if (root / "panda_gaz" / "exciting_traj_1.npz").is_file():
-            return root / "panda_gaz" / "exciting_traj_1.npz"
-    return None
 
 
 @pytest.fixture(scope="module")
@@ -155,7 +147,7 @@ def test_panda_log_meets_the_issue_35_targets():
     """The real Panda log, defaults, last 30 % held out: RMS vs logged torque at most 0.33 0.44 0.29 0.46 0.12
     0.13 0.07 N m (issue 35's done-when; plain OLS at 5 Hz: 0.30 0.40 0.26 0.42 0.107 0.117 0.063, SOURCE.md of
     the shared data), and within 15 % of that OLS on every joint."""
-    path = _panda_log()
+    path = shared_panda_log()
     if path is None:
         pytest.skip("the shared Panda log (RC3R_SHARED_DATA or ../shared/data/panda_gaz) is absent")
     from rc3r.identify.log import load_log
