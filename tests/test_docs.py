@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import json
 import re
 from pathlib import Path
@@ -182,6 +183,32 @@ def _mask(line: str, cwd) -> str:
     return line
 
 
+#: A printed number (the text between numbers is compared exactly, the numbers within NUMBER_RTOL).
+NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+
+#: How far a printed number may move between the supported environments (Python 3.10 with NumPy 2.2 /
+#: SciPy 1.15 against 3.12 with NumPy 2.4 / SciPy 1.17; other BLAS builds): SLSQP's excitation design
+#: stops at a slightly different optimum (condition number 3.850 against 3.854, 0.1 %), and every
+#: figure computed downstream of that trajectory moves with it. The transcripts document what the
+#: commands print (every word, verdict and layout exactly); the numbers themselves are pinned by the
+#: tests of the modules that compute them. 5 % leaves room for that drift and still fails on a changed
+#: default (a cut-off, a rate, a run count) or a figure off by a factor.
+NUMBER_RTOL = 0.05
+
+
+def same_line(got: str, want: str) -> bool:
+    """Whether a printed line matches the transcript's: the same words, every number within NUMBER_RTOL
+    of the transcript's (or within one unit of its last printed digit, for rounded small values)."""
+    if NUMBER.sub("#", got) != NUMBER.sub("#", want):
+        return False
+    for a, b in zip(NUMBER.findall(got), NUMBER.findall(want)):
+        mantissa = b.lower().split("e")[0]
+        ulp = 10.0 ** -len(mantissa.split(".")[1]) if "." in mantissa else 1.0
+        if abs(float(a) - float(b)) > max(NUMBER_RTOL * abs(float(b)), ulp):
+            return False
+    return True
+
+
 def run_commands(commands, cwd) -> list[list[str]]:
     """Each command's stdout lines (run in-process in ``cwd``, working directory prefix removed)."""
     import contextlib
@@ -206,6 +233,9 @@ def run_commands(commands, cwd) -> list[list[str]]:
 
 
 @pytest.mark.slow
+@pytest.mark.skipif(importlib.util.find_spec("cvxpy") is None,
+                    reason="the transcripts were recorded with the test extra's cvxpy (Python >= 3.11): identify "
+                           "prints the consistency SDP's line only with it")
 def test_every_console_transcript_marked_as_checked_is_what_its_commands_print(tmp_path):
     """The marked console blocks of docs/*.md (docs/identification.md's worked example) hold exactly the
     commands of their example script, in its order, and each command's stdout line for line (wall times
@@ -219,7 +249,21 @@ def test_every_console_transcript_marked_as_checked_is_what_its_commands_print(t
         work.mkdir()
         got = run_commands([cmd for _, cmd, _ in blocks], work)
         for (page, cmd, want), lines in zip(blocks, got):
-            assert [_mask(ln, work) for ln in lines] == [_mask(ln, work) for ln in want], f"{page}: $ {cmd}"
+            have, need = [_mask(ln, work) for ln in lines], [_mask(ln, work) for ln in want]
+            bad = [f"  got:  {a}\n  want: {b}" for a, b in zip(have, need) if not same_line(a, b)]
+            assert len(have) == len(need) and not bad, \
+                f"{page}: $ {cmd} ({len(have)} lines printed, {len(need)} in the transcript)\n" + "\n".join(bad)
+
+
+def test_a_transcript_line_matches_on_its_words_and_numbers_within_tolerance():
+    """same_line: words exact; 3.854 printed where the transcript says 3.85 passes (0.1 %), 4.1 where it
+    says 3.85 fails (6.5 %), a changed word fails, 0.004 against 0.003 passes (one unit of the last digit)."""
+    assert same_line("condition number: 3.854 (6.14x worse)", "condition number: 3.85 (6.15x worse)")
+    assert not same_line("condition number: 4.1 (6.14x worse)", "condition number: 3.85 (6.15x worse)")
+    assert not same_line("verdict: chattering 3.85", "verdict: clean 3.85")
+    assert same_line("rms 0.004 N m", "rms 0.003 N m")
+    assert not same_line("rms 0.005 N m", "rms 0.003 N m")
+    assert not same_line("20001 samples", "10001 samples")
 
 
 def _update() -> None:
