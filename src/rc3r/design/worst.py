@@ -377,6 +377,7 @@ class Hardest:
         self.search = Search(spec.robot_model, sp, spec.trajectory)
         self.kind, self.box, self.ends, self.suffix = "off", None, {}, ""
         self.masses: dict = {}  # spec -> M_p (N, n, n) of the plants the last search returned
+        self._found: list = []
         u = parse_spec(cfg.get("plant", {}).get("urdf_uncertainty"))
         self.urdf = URDFSet(spec.robot_model, u) if u is not None else None
         if cfg.get("payload"):
@@ -424,8 +425,9 @@ class Hardest:
         """The hardest plants for the law's gains (most demanding first; at most 3, and the heaviest arm)."""
         G = self.gains(sliding, **w)
         self.masses = {}
-        if self.kind == "ellipsoid":
-            return search_ellipsoid(self.search, self.realise, G, self.rate, delay=self.delay, pool=self.pool)[:3]
+        if self.kind == "ellipsoid":  # M_p realised on demand (eps_factor): the closed form's points cost a fit
+            self._found = search_ellipsoid(self.search, self.realise, G, self.rate, delay=self.delay, pool=self.pool)[:3]
+            return self._found
         if self.box is not None:
             found = search_box(self.search, self.box, G, self.rate, delay=self.delay)[:3]
             if self.suffix:  # corners of the box around the arm's lightest plant, and the heaviest arm
@@ -458,6 +460,8 @@ class Hardest:
         """The smallest factor f on the law's boundary layers (eps or eps_i) for which the held loop at ``rate``
         is stable on every plant the last :meth:`plants` returned (``T lambda_max(M_p^-1 G) <`` the limit);
         inf if no boundary layer is thick enough (K and b M0 alone reach the limit: a higher rate is needed)."""
+        if not self.masses and self.kind == "ellipsoid":
+            self.masses = {e["spec"]: self.search.mass(self.realise(e["spec"]).theta) for e in self._found}
         if not self.masses:
             return 1.0
         G = self.gains(sliding, **w)
