@@ -4,7 +4,8 @@ r"""The rule's fast form verified by simulation over the bounds, at the rate and
 trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
 
 1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's own model (theta_0's M,
-   :func:`controller_model`);
+   :func:`controller_model`), its bandwidth b capped so that K alone uses at most :data:`K_SET_SHARE` of the
+   held loop's limit at rate / margin on the hardest plant of the bounds;
 2. runs the robust law with it on the plants of the bounds -- for a payload the lightest and the
    heaviest end and ``n`` seeded random masses, for a box its nominal robot and ``n`` seeded random
    plants (``random:<plant_seed(seed, k)>``, as ``rc3r montecarlo``), for an identification's
@@ -14,10 +15,12 @@ trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
    draw), beyond the bounds by the URDF's own uncertainty when they trust the URDF (``[plant]
    urdf_uncertainty``) -- at the rate and at rate / margin, as campaign jobs
    (:func:`rc3r.campaign.runner.run_many`: a local pool or a Dask scheduler);
-3. starts from the fast form's eps for rate / margin (:func:`start_eps`), tightens eps by halves
+3. starts from the fast form's eps for rate / margin (:func:`start_eps`), or 1.25 x the eps from which the
+   held loop at rate / margin is stable on the hardest plants if larger, tightens eps by halves
    while every run is ``clean``, or backs off by doubling while one chatters, saturates, leaves the
    joint limits or diverges (at most ``steps`` times), then bisects the bracket once (geometric
-   mean); the smallest clean eps is the design;
+   mean); the smallest clean eps is the design. An eps whose held loop at rate / margin is unstable on a
+   searched plant (:func:`_loop`) is not clean and is not simulated;
 4. runs the baselines and the other laws on the same plants at the rate: FBL with the rule's
    Kp, Kd, the adaptive law with the rule's Gamma, and eq. (7) with eps_i scaled like eps (the fast
    form's eps_i if that is not clean), at the rate and at rate / margin like eq. 6; the design is
