@@ -202,10 +202,14 @@ class DesignResult:
         return next((lv for lv in self.levels if lv["eps"] == self.eps), None)
 
     def gains(self) -> dict:
-        """``[gains.<law>]`` tables of the design (the fast form's, with the verified eps and eps_i)."""
+        """``[gains.<law>]`` tables of the design (the fast form's, with the verified eps and eps_i; not verified,
+        the largest eps and the last eps_i tried)."""
         out = {law: self.design.gains(law) for law in ("robust", "adaptive", "fbl", "pd")}
-        if self.eps is not None:
-            out["robust"]["eps"] = float(self.eps)
+        eps = self.eps
+        if eps is None and self.levels:  # not verified: the thickest layer tried (as :attr:`worst` reports; the
+            eps = max(lv["eps"] for lv in self.levels)  # fast form's may be unstable on a searched plant)
+        if eps is not None:
+            out["robust"]["eps"] = float(eps)
         if self.design.eps_i is not None:
             out["robust-coeff"] = {**self.design.gains("robust-coeff"), "eps_i": float(self.eps_i or
                                                                                        self.design.eps_i)}
