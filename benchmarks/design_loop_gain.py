@@ -3,9 +3,10 @@
 ``python benchmarks/design_loop_gain.py DESIGN.toml BOUNDS.toml`` evaluates the gains of a design
 (``rc3r design``'s design.toml; eq. 6 ``robust`` and eq. 7 ``robust-coeff``) with M_p the mass matrix of
 the centre of an identification's bounds.toml (``rc3r identify``'s physically consistent estimate of the
-real arm), beside the figure on the design's own controller model, and the worst of the 2^n plants whose
-links are the URDF's (payload at its light end) scaled by s or 1 (s = 0.5, 0.3, 0.2, 0.1): what the
-design's URDF-uncertainty box would have to cover for the real arm. The held loop of period T is stable
+real arm), beside the figure on the design's own controller model, on the hardest plant of the design's
+own URDF uncertainty ([plant] urdf_uncertainty, rc3r.uncertainty.urdf: its lightest plant), and the worst
+of the 2^n plants whose links are the URDF's (payload at its light end) scaled by s or 1 (s = 0.5, 0.3,
+0.2, 0.1). The held loop of period T is stable
 while the figure is below 2 (docs/design.md, "Hardest plants"). Used in docs/design.md ("What the URDF
 uncertainty does not cover") with the Panda log of Gaz et al. (RA-L 2019).
 """
@@ -35,8 +36,12 @@ def main(design_path: str, bounds_path: str) -> None:
         sl = {k: g[k] for k in ("K", "Lambda", "K_inertia") if k in g}
         gains[law] = (hard.gains(sl, rho=spec.model["rho"], eps=g["eps"]) if law == "robust"
                       else hard.gains(sl, rho_i=rho_i, eps_i=g["eps_i"]))
+        found = hard.plants(sl, rho=spec.model["rho"], eps=g["eps"]) if law == "robust" else \
+            hard.plants(sl, rho_i=rho_i, eps_i=g["eps_i"])
         print(f"{law}: T lambda_max on the controller's model {np.max(plant_gain(gains[law], hard.search.M0)[0]) / rate:.3f}, "
-              f"on the bounds' centre {np.max(plant_gain(gains[law], m_other)[0]) / rate:.3f} (limit 2)")
+              f"on the bounds' centre {np.max(plant_gain(gains[law], m_other)[0]) / rate:.3f}, on the design's hardest "
+              f"plant {found[0]['spec']} {found[0]['T_lambda']:.3f} (limit 2; K = {g['K']}, b = {g.get('K_inertia', 0)}, "
+              f"{'eps' if law == 'robust' else 'eps_i'} = {g.get('eps', g.get('eps_i'))})")
     if not cfg.get("payload"):
         return
     from rc3r.plant_sets import _payload, _payload_plant

@@ -49,6 +49,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.uncertainty.sampled``           sampled lower bound on max ||theta - theta_0||
 ``rc3r.uncertainty.inertia``           M(q; theta) of a coefficient vector, linear in theta (ThetaModel)
 ``rc3r.uncertainty.ellipsoid``         plants drawn in an identification's ellipsoid (centre, random, boundary)
+``rc3r.uncertainty.urdf``              the URDF's own error: link pseudo-inertias scaled per direction (physical set)
 ``rc3r.identify``                      identification from logs: bounds for the robust laws (docs/identification.md)
 ``rc3r.identify.log``                  logs (CSV, NPZ): loading and validation
 ``rc3r.identify.filtering``            resampling, zero-phase (parallel) low-pass, differentiation, cut-off candidates

@@ -91,14 +91,18 @@ class _Bounds:
         return self.box.source
 
 
-def _urdf_box(nominal, bounds: _Bounds):
-    """The URDF's own uncertainty of the plants (``[plant] urdf_uncertainty``), or None."""
-    f = getattr(bounds, "urdf_uncertainty", 0.0)
-    if not f:
-        return None
-    from .uncertainty.box import urdf_box
+def _urdf_set(nominal, bounds: _Bounds):
+    """The URDF's own uncertainty of the plants (``[plant] urdf_uncertainty``,
+    :class:`rc3r.uncertainty.urdf.URDFSet` of ``nominal``), or None."""
+    from .uncertainty.urdf import URDFSet, parse_spec
 
-    return urdf_box(nominal, f)
+    spec = parse_spec(getattr(bounds, "urdf_uncertainty", None))
+    return None if spec is None else URDFSet(nominal, spec)
+
+
+def _arm_seed(seed: int) -> int:
+    """The seed of the arm drawn in the URDF uncertainty beside plant ``random:<seed>``."""
+    return int(np.random.SeedSequence([int(seed), 36]).generate_state(1, np.uint64)[0] >> np.uint64(1))
 
 
 def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
@@ -106,18 +110,23 @@ def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
         lock = getattr(nominal, "locked", None)
         plant = type(nominal).from_urdf(spec, lock=lock) if lock else type(nominal).from_urdf(spec)
     elif bounds.payload is not None:
-        plant = _payload_plant(nominal, bounds.payload, spec, _urdf_box(nominal, bounds))
+        plant = _payload_plant(nominal, bounds.payload, spec, _urdf_set(nominal, bounds))
     elif spec == "nominal":
         plant = nominal
     else:
         # random draws are redrawn (same seeded stream) until the robot is physical
-        ubox = _urdf_box(nominal, bounds)
-        if ubox is not None:  # the plants go beyond the box by the URDF's own error (the model keeps the box)
-            from .uncertainty.box import widened
-
-            plant = perturb(nominal, widened(bounds.box, ubox), spec, simulable=spec.startswith("random"))
-        else:
-            plant = perturb(nominal, bounds.box, spec, simulable=spec.startswith("random"))
+        uset = _urdf_set(nominal, bounds)
+        spec, plus, arm = spec.partition("+")
+        if plus and uset is None:
+            raise ConfigError(f"plant {spec}+{arm}: '+' needs [plant] urdf_uncertainty")
+        if uset is not None:  # the plants' arm goes beyond the URDF by its own error (the model keeps the box)
+            kind, _, arg = spec.partition(":")
+            if plus:
+                nominal = uset.plant(arm)
+            elif kind == "random" and arg.isdigit():
+                nominal = uset.random(_arm_seed(int(arg)))
+        plant = nominal if spec == "nominal" else perturb(nominal, bounds.box, spec,
+                                                          simulable=spec.startswith("random"))
     plant.require_simulable()
     return plant
 
@@ -137,28 +146,26 @@ def _bounds_plant(nominal, bf: dict, spec: str):
                                physical=bf.get("physical"))
 
 
-def _payload_plant(nominal, payload, spec: str, ubox=None):
+def _payload_plant(nominal, payload, spec: str, uset=None):
     """The plant carrying a payload: ``upper`` (default, also for ``nominal``) the heaviest,
     ``lower`` the lightest, ``random:<seed>`` a seeded uniform mass, ``mass:<kg>`` a given one.
 
-    With the URDF's own uncertainty ``ubox`` (a :class:`rc3r.uncertainty.box.Box`, ``[plant]
-    urdf_uncertainty``) ``random:<seed>`` also draws the arm in it (seed ``SeedSequence([seed, 36])``),
-    and ``<payload spec>+corner:<bits>[@s]`` puts the arm at a corner of it (``rc3r design``'s search)."""
+    With the URDF's own uncertainty ``uset`` (a :class:`rc3r.uncertainty.urdf.URDFSet`, ``[plant]
+    urdf_uncertainty``) ``random:<seed>`` also draws the arm in it (``urdf-random:<s>``, s from
+    ``SeedSequence([seed, 36])``), and ``<payload spec>+<arm spec>`` (``lower+urdf-lower`` ...) puts the arm
+    where the arm spec says (``rc3r design``'s search)."""
     from .uncertainty.payload import with_payload
 
     (lo, hi), com = payload
     spec, plus, arm = spec.partition("+")
-    if plus and ubox is None:
-        raise ConfigError(f"plant {spec}+{arm!r}: '+' needs [plant] urdf_uncertainty > 0")
+    if plus and uset is None:
+        raise ConfigError(f"plant {spec}+{arm!r}: '+' needs [plant] urdf_uncertainty")
     kind, _, arg = spec.partition(":")
-    if ubox is not None:
-        from .uncertainty.box import perturb
-
-        if plus:  # checked with the payload on (_plant): the search realised it so
-            nominal = perturb(nominal, ubox, arm)
+    if uset is not None:
+        if plus:
+            nominal = uset.plant(arm)
         elif kind == "random" and arg.isdigit():
-            sub = int(np.random.SeedSequence([int(arg), 36]).generate_state(1, np.uint64)[0] >> np.uint64(1))
-            nominal = perturb(nominal, ubox, f"random:{sub}", simulable=True)
+            nominal = uset.random(_arm_seed(int(arg)))
     if kind in ("nominal", "upper") and not arg:
         m = hi
     elif kind == "lower" and not arg:

@@ -282,14 +282,9 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     if payload is not None and model_cfg.get("theta") != "plant":
         perturbed = True  # a payload range is unknown to the controller: it gets theta_0 and rho of the range
     box_bounds = _Bounds(nominal, box or cfg.get("box") or plant_cfg.get("box"), payload)
-    try:
-        box_bounds.urdf_uncertainty = float(plant_cfg.get("urdf_uncertainty", 0.0))
-    except (TypeError, ValueError):
-        raise ConfigError(f"[plant] urdf_uncertainty must be a fraction in [0, 1), got "
-                          f"{plant_cfg.get('urdf_uncertainty')!r}") from None
-    if not 0.0 <= box_bounds.urdf_uncertainty < 1.0:
-        raise ConfigError(f"[plant] urdf_uncertainty must be a fraction in [0, 1), got "
-                          f"{box_bounds.urdf_uncertainty!r}")
+    from .uncertainty.urdf import parse_spec as _urdf_spec
+
+    box_bounds.urdf_uncertainty = _urdf_spec(plant_cfg.get("urdf_uncertainty"))  # checked; None: none
     spec = plant or plant_cfg.get("spec", "nominal")
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])

@@ -168,7 +168,7 @@ def design_markdown(result, command: str = "") -> str:
               + ("K(q) = b M(q), scheduled: every mode of the model's M^-1 K is b"
                  if d.scaling == "inertia" else "K = b M(q_d(0)), the full matrix"
                  if d.scaling == "full" else "K_i = b / (M^-1(q_d(0)))_ii") + "), "
-              f"Lambda = {d.Lambda:.4g} 1/s;",
+              f"Lambda = {d.Lambda:.4g} 1/s" + _b_note(result) + ";",
               f"* stability boundary of the rule at {result.rate:g} Hz: eps = T rho L_Y / (c_d - T L_K) = "
               f"{d.eps_stable:.4g};",
               f"* fast form (free of oscillation at {result.rate:g} Hz): eps = {d.eps:.4g};",
@@ -201,20 +201,26 @@ def design_markdown(result, command: str = "") -> str:
                      + f"the rule predicted {_f(None if not w.get('model_T_lambda') else w['limit'] / w['model_T_lambda'])} "
                      "x the model's) before the held loop at the rate loses stability."
                      + _not_clean(result, law, w))
-    f = float(result.config.get("plant", {}).get("urdf_uncertainty", 0.0))
-    lines.append(f"* URDF uncertainty: " + (f"+-{f:g} x |value| on every standard parameter of every link, beyond "
-                 "the bounds (which trust the URDF): the random plants draw it, the search visits its corners "
-                 "(docs/design.md, 'URDF uncertainty'; --urdf-uncertainty 0 turns it off)." if f else
-                 "none (the plants are the bounds' own; --urdf-uncertainty F adds it)."))
+    lines.append("* URDF uncertainty: " + _urdf_line(result))
     if result.search != "off":
         how = ("both ends of the payload range" if result.search == "payload" else
+               "the payload's lower end with every link at its lower factor (the lightest plant of the set in every "
+               "direction: the exact maximiser of T lambda_max(M_p^-1 G)), the upper end with every link at its "
+               "upper factor, and the URDF's own arm at the lower end" if result.search.startswith("payload") else
                "the ellipsoid's points of least inertia along the top directions of M_p^-1 G (closed form), "
                "alternated with the top generalized eigenvector" if result.search == "ellipsoid" else
                "corners of the box lightest along the top directions of M_p^-1 G, alternated with the top "
-               "generalized eigenvector" + (" (around the payload's lightest end)" if "payload" in result.search
-                                            else ""))
+               "generalized eigenvector" + (", around the arm's lightest plant of the URDF uncertainty, and its "
+                                            "heaviest" if "URDF" in result.search else ""))
         lines.append(f"* searched: {result.search} ({how}); the hardest plants join the random ones at every eps "
-                     "tried: clean means clean on them too.")
+                     "tried: clean means clean on them too, and an eps whose held loop at rate / margin is unstable on "
+                     "one of them (T lambda_max >= the limit) is refused without simulation.")
+        for name, key, val in (("eq. 6", "eps", result.eps_needed), ("eq. 7", "eps_i", result.eps_i_needed)):
+            if val is not None:
+                lines.append(f"* {name}: the held loop on the hardest plants is stable at {result.rate / result.margin:g} "
+                             + (f"Hz from {key} = {val:.4g} (the search starts above it)" if np.isfinite(val) else
+                                "Hz for no boundary layer: K and b M0 alone reach the limit there (a higher rate, "
+                                "a smaller bandwidth, or a smaller URDF uncertainty)") + ".")
     lines += ["", "## The chosen gains (design.toml)", "", "| law | gains |", "|---|---|"]
     for law, table in g.items():
         text = "; ".join(f"{k} = {_vec(v)}" for k, v in table.items())
@@ -273,6 +279,28 @@ def _not_clean(result, law: str, w: dict) -> str:
                        f"with these gains, or a boundary layer about {w['T_lambda'] / w['limit']:.3g} x thicker.")
     return text + ": its loop on the hardest plant is stable, so the failing runs are not the held loop's: see " \
                   "'decided by' and 'Not verified: what to try'."
+
+
+def _b_note(result) -> str:
+    """Why b is below the fast form's (the held loop of K on the hardest plant), or nothing."""
+    b = getattr(result, "b_note", None)
+    if not b:
+        return ""
+    return (f" (b lowered from {b['b']:.4g}: on the hardest plant `{_short(b['plant'])}` max lambda_max(M_p^-1 K / b) = "
+            f"{b['kappa']:.3g}, so K alone may use half the held loop's limit at {result.rate / result.margin:g} Hz "
+            f"only up to b = {b['b_max']:.4g})")
+
+
+def _urdf_line(result) -> str:
+    """What design.md says of the URDF uncertainty (:mod:`rc3r.uncertainty.urdf`)."""
+    from ..uncertainty.urdf import parse_spec
+
+    spec = parse_spec(result.config.get("plant", {}).get("urdf_uncertainty"))
+    if spec is None:
+        return "none (the plants are the bounds' own; --urdf-uncertainty SPEC adds it)."
+    text = getattr(result, "urdf", None) or f"spec '{spec}'"
+    return (f"{text}; beyond the bounds (which trust the URDF): the random plants draw it, the search visits its "
+            "lightest and heaviest plants (docs/design.md, 'URDF uncertainty'; --urdf-uncertainty off turns it off).")
 
 
 def _short(spec: str) -> str:

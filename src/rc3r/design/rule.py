@@ -264,7 +264,7 @@ def eps_boundary(spec: Spectrum, rate: float, rho: float, K, delay: int = 0, rho
 
 
 def fast_design(spec: Spectrum, rate: float, *, rho: float, rho_i=None, delay: int = 0, margin: float = 1.0,
-                Lambda: float | None = None, coupling: str = "inertia") -> Design:
+                Lambda: float | None = None, coupling: str = "inertia", b_max: float | None = None) -> Design:
     """The rule's fast form (module docstring): gains of every designed law at ``rate`` [Hz].
 
     Parameters
@@ -286,6 +286,8 @@ def fast_design(spec: Spectrum, rate: float, *, rho: float, rho_i=None, delay: i
         (``K = 0``, ``K_inertia = b``: every mode of M^-1 K is b for the model, so neither M's
         coupling nor its variation along the trajectory caps b); ``"diag"`` the constant ``b kappa``;
         ``"full"`` the constant ``b M(q_d(0))``; ``"auto"`` the constant one of the two with the larger b.
+    b_max : float, optional
+        A cap on b [1/s] (``rc3r design``: the held loop of K alone on the hardest plant of the bounds).
     """
     rate, margin = _check_rate(rate, margin)
     d = _delay(delay)
@@ -293,7 +295,7 @@ def fast_design(spec: Spectrum, rate: float, *, rho: float, rho_i=None, delay: i
         raise ParameterError(f"coupling must be 'inertia', 'auto', 'diag' or 'full', got {coupling!r}")
     Tm = margin / rate
     a = real_limit(d)
-    cap = min(rate / B_FRACTION, B_MAX)
+    cap = min(rate / B_FRACTION, B_MAX, np.inf if b_max is None else float(b_max))
     l_diag = spec.lam(spec.kappa)
     sched = coupling == "inertia"
     full = spec.M0 is not None and (coupling == "full" or coupling == "auto" and spec.lam(spec.M0) < l_diag)

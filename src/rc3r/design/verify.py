@@ -4,7 +4,8 @@ r"""The rule's fast form verified by simulation over the bounds, at the rate and
 trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
 
 1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's own model (theta_0's M,
-   :func:`controller_model`);
+   :func:`controller_model`), its bandwidth b capped so that K alone uses at most :data:`K_SET_SHARE` of the
+   held loop's limit at rate / margin on the hardest plant of the bounds;
 2. runs the robust law with it on the plants of the bounds -- for a payload the lightest and the
    heaviest end and ``n`` seeded random masses, for a box its nominal robot and ``n`` seeded random
    plants (``random:<plant_seed(seed, k)>``, as ``rc3r montecarlo``), for an identification's
@@ -14,10 +15,12 @@ trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
    draw), beyond the bounds by the URDF's own uncertainty when they trust the URDF (``[plant]
    urdf_uncertainty``) -- at the rate and at rate / margin, as campaign jobs
    (:func:`rc3r.campaign.runner.run_many`: a local pool or a Dask scheduler);
-3. starts from the fast form's eps for rate / margin (:func:`start_eps`), tightens eps by halves
+3. starts from the fast form's eps for rate / margin (:func:`start_eps`), or 1.25 x the eps from which the
+   held loop at rate / margin is stable on the hardest plants if larger, tightens eps by halves
    while every run is ``clean``, or backs off by doubling while one chatters, saturates, leaves the
    joint limits or diverges (at most ``steps`` times), then bisects the bracket once (geometric
-   mean); the smallest clean eps is the design;
+   mean); the smallest clean eps is the design. An eps whose held loop at rate / margin is unstable on a
+   searched plant (:func:`_loop`) is not clean and is not simulated;
 4. runs the baselines and the other laws on the same plants at the rate: FBL with the rule's
    Kp, Kd, the adaptive law with the rule's Gamma, and eq. (7) with eps_i scaled like eps (the fast
    form's eps_i if that is not clean), at the rate and at rate / margin like eq. 6; the design is
@@ -44,17 +47,23 @@ from .worst import Hardest
 __all__ = ["DesignResult", "controller_model", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
 
 
-#: Default URDF uncertainty of a design whose bounds trust a URDF (docs/design.md, "URDF uncertainty"):
-#: every standard parameter of every link may be this fraction of its magnitude lighter or heavier.
-URDF_UNCERTAINTY = 0.5
+#: Share of the held loop's stability limit at rate / margin that K alone may use on the hardest plant of the
+#: bounds (``rc3r design`` lowers the fast form's bandwidth b to it; the rest is the robust term's).
+K_SET_SHARE = 0.5
+
+#: Default URDF uncertainty of a design whose bounds trust a URDF (docs/design.md, "URDF uncertainty";
+#: :mod:`rc3r.uncertainty.urdf`): every link's pseudo-inertia scaled by 0.1..1.5 along each principal direction,
+#: the last link's (the tool or hand) by 0.05..1.5.
+URDF_UNCERTAINTY = "0.1..1.5,-1=0.05..1.5"
 
 
 def design_config(config: dict | None = None, **options) -> dict:
     """The run configuration a design is made for: ``config`` (a ``--config`` table) with the command
     line's ``options`` written into it (``robot``, ``urdf``, ``lock``, ``payload`` (lo, hi), ``payload_com``,
     ``box``, ``bounds``, ``friction``, ``torque_limit``, ``noise``, ``delay``, ``duration``, ``tolerance``,
-    ``urdf_uncertainty``: ``[plant] urdf_uncertainty``, default :data:`URDF_UNCERTAINTY` for bounds that trust
-    the URDF (a payload range, a box), none for an identification's ``bounds``; 0 disables it).
+    ``urdf_uncertainty``: ``[plant] urdf_uncertainty``, a spec of :func:`rc3r.uncertainty.urdf.parse_spec`,
+    default :data:`URDF_UNCERTAINTY` for bounds that trust the URDF (a payload range, a box), none for an
+    identification's ``bounds``; ``off`` or 0 disables it).
 
     Gains are what a design chooses: a config with ``[gains]`` or ``[controller]`` gains is refused.
     """
@@ -90,13 +99,16 @@ def design_config(config: dict | None = None, **options) -> dict:
     for key in ("friction", "torque_limit", "noise", "delay"):
         if options.get(key) is not None:
             plant[key] = options[key]
+    from ..uncertainty.urdf import parse_spec
+
     f = options.get("urdf_uncertainty")
     if f is None:
         f = plant.get("urdf_uncertainty", URDF_UNCERTAINTY)
-    if cfg.get("bounds") or float(f) == 0.0:  # identified bounds do not trust the URDF
+    f = parse_spec(f)
+    if cfg.get("bounds") or f is None:  # identified bounds do not trust the URDF
         plant.pop("urdf_uncertainty", None)
     else:
-        plant["urdf_uncertainty"] = float(f)
+        plant["urdf_uncertainty"] = f
     if plant:
         cfg["plant"] = plant
     sim = dict(cfg.get("simulation", {}))
@@ -155,6 +167,10 @@ class DesignResult:
     effort_limit: list | None = None
     eps_i: float | None = None
     search: str = "off"
+    eps_needed: float | None = None
+    eps_i_needed: float | None = None
+    urdf: str | None = None
+    b_note: dict | None = None
 
     @property
     def worst(self) -> dict:
@@ -186,10 +202,14 @@ class DesignResult:
         return next((lv for lv in self.levels if lv["eps"] == self.eps), None)
 
     def gains(self) -> dict:
-        """``[gains.<law>]`` tables of the design (the fast form's, with the verified eps and eps_i)."""
+        """``[gains.<law>]`` tables of the design (the fast form's, with the verified eps and eps_i; not verified,
+        the largest eps and the last eps_i tried)."""
         out = {law: self.design.gains(law) for law in ("robust", "adaptive", "fbl", "pd")}
-        if self.eps is not None:
-            out["robust"]["eps"] = float(self.eps)
+        eps = self.eps
+        if eps is None and self.levels:  # not verified: the thickest layer tried (as :attr:`worst` reports; the
+            eps = max(lv["eps"] for lv in self.levels)  # fast form's may be unstable on a searched plant)
+        if eps is not None:
+            out["robust"]["eps"] = float(eps)
         if self.design.eps_i is not None:
             out["robust-coeff"] = {**self.design.gains("robust-coeff"), "eps_i": float(self.eps_i or
                                                                                        self.design.eps_i)}
@@ -231,7 +251,9 @@ class DesignResult:
                 "low_rates": self.low_rates, "lowest_clean_rate": self.lowest_clean_rate(),
                 "plants": self.plants, "model": self.model, "spectrum": self.spectrum,
                 "effort_limit": self.effort_limit, "gains": self.gains(), "config": self.config,
-                "recommendation": self.recommendation(), "search": self.search, "worst": self.worst}
+                "recommendation": self.recommendation(), "search": self.search, "worst": self.worst,
+                "eps_needed": self.eps_needed, "eps_i_needed": self.eps_i_needed, "urdf": self.urdf,
+                "b_note": self.b_note}
 
 
 def _resolve(cfg: dict, rate: float):
@@ -326,6 +348,17 @@ def deciding(rows: list[dict], searched=()) -> dict | None:
             "searched": name(r) in searched}
 
 
+def _loop(found: list[dict], margin: float, low: float) -> dict | None:
+    """The searched plant whose held loop is unstable at rate / margin (``T lambda_max(M_p^-1 G) >=`` the limit
+    at the lower rate), as :func:`deciding` names a plant; None if there is none."""
+    bad = [e for e in found if e["T_lambda"] * margin >= e["limit"]]
+    if not bad:
+        return None
+    e = max(bad, key=lambda e: e["T_lambda"])
+    return {"plant": e["spec"], "verdict": f"loop gain {e['T_lambda'] * margin:.3g} >= {e['limit']:.3g}",
+            "rate": float(low), "max_error": float("nan"), "searched": True, "loop": True}
+
+
 def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int = 50, seed: int = 0,
                   workers: int | None = None, scheduler: str | None = None, steps: int = 3,
                   progress=None, search: bool = True) -> DesignResult:
@@ -365,6 +398,16 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     sp = spectrum(model, spec.trajectory, duration)
     rho = float(spec.model["rho"])
     design = fast_design(sp, rate, rho=rho, rho_i=rho_i, delay=delay)
+    hard = Hardest(cfg, spec, sp, rate, delay) if search else None
+    b_note = None
+    if hard is not None:  # K alone may use half the held loop's budget at rate / margin on the hardest plant
+        unit = {"K": design.K / design.bandwidth, "K_inertia": 1.0 if design.K_inertia else 0.0}
+        top = hard.plants(unit, rho=0.0, eps=1.0)[0]
+        kappa = top["T_lambda"] * rate  # max_t lambda_max(M_p^-1 K / b)
+        b_max = K_SET_SHARE * top["limit"] * rate / (margin * kappa)
+        if design.bandwidth > b_max:
+            b_note = {"b": design.bandwidth, "b_max": b_max, "plant": top["spec"], "kappa": kappa}
+            design = fast_design(sp, rate, rho=rho, rho_i=rho_i, delay=delay, b_max=b_max)
     plants = plant_specs(cfg, n, seed)
     res = DesignResult(cfg, float(rate), float(margin), design, None, plants=[s for _, s in plants],
                        model={**{k: spec.model.get(k) for k in ("rho", "theta_source", "rho_source", "box", "nominal")},
@@ -377,8 +420,9 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     run = _Runner(cfg, table, duration, workers, scheduler, progress)
     sliding = {k: v for k, v in design.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
     low = rate / margin
-    hard = Hardest(cfg, spec, sp, rate, delay) if search else None
+    res.b_note = b_note
     res.search = hard.kind if hard is not None else "off"
+    res.urdf = hard.urdf.describe() if hard is not None and hard.urdf is not None else None
 
     def with_worst(entries):
         names = {s for _, s in plants}
@@ -387,19 +431,29 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     def level(eps):
         found = hard.plants(sliding, rho=rho, eps=eps) if hard is not None else []
         pl = with_worst(found)
-        jobs = run.jobs("robust", sliding, eps, rate, pl) + \
-            (run.jobs("robust", sliding, eps, low, pl) if margin > 1 else [])
-        rows = run.run(jobs, f"robust, eps {eps:.4g}")
-        at = summarize([r for r in rows if r["rate_hz"] == float(rate)])
-        lo = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else at
+        loop = _loop(found, margin, low)
+        if loop is not None:  # the held loop is unstable on a searched plant: refused without simulation
+            rows, at, lo = [], summarize([]), summarize([])
+        else:
+            jobs = run.jobs("robust", sliding, eps, rate, pl) + \
+                (run.jobs("robust", sliding, eps, low, pl) if margin > 1 else [])
+            rows = run.run(jobs, f"robust, eps {eps:.4g}")
+            at = summarize([r for r in rows if r["rate_hz"] == float(rate)])
+            lo = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else at
         lv = {"eps": float(eps), "factor": float(eps / design.eps), "at_rate": at, "at_low": lo,
-              "clean": bool(at["clean"] and lo["clean"]), "worst": found[0] if found else None,
+              "clean": bool(loop is None and at["clean"] and lo["clean"]), "worst": found[0] if found else None,
               "model_T_lambda": hard.model_gain(sliding, rho=rho, eps=eps) if hard is not None else None,
-              "decided_by": deciding(rows, {e["spec"] for e in found}), "plants": len(pl)}
+              "decided_by": loop or deciding(rows, {e["spec"] for e in found}), "plants": len(pl)}
         res.levels.append(lv)
         return lv["clean"]
 
     eps = start_eps(design, sp, rate, margin, rho)
+    if hard is not None:  # no thinner layer than the held loop on the searched plants allows at rate / margin
+        hard.plants(sliding, rho=rho, eps=eps)
+        need = hard.eps_factor(sliding, low, rho=rho, eps=eps)
+        res.eps_needed = float(eps * need) if math.isfinite(need) else float("inf")
+        if math.isfinite(need) and need > 1.0:
+            eps *= 1.25 * need
     clean, failed = (eps, None) if level(eps) else (None, eps)
     for _ in range(steps):  # halve while clean, double while not, until the boundary is bracketed
         if clean is not None and failed is None:
@@ -430,17 +484,27 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
     if design.eps_i is not None:
         sl = dict(sliding)
         tried = [design.eps_i * factor] + ([design.eps_i] if factor != 1.0 else [])
+        if hard is not None:  # and no thinner than the held loop on the searched plants allows at rate / margin
+            hard.plants(sl, rho_i=rho_i, eps_i=tried[0])
+            need = hard.eps_factor(sl, low, rho_i=rho_i, eps_i=tried[0])
+            res.eps_i_needed = float(tried[0] * need) if math.isfinite(need) else float("inf")
+            if math.isfinite(need) and need > 1.0:
+                tried = [tried[0] * 1.25 * need]
         for eps_i in tried:  # verified like eq. 6: every plant (and the hardest) at the rate and at rate / margin
             found = hard.plants(sl, rho_i=rho_i, eps_i=eps_i) if hard is not None else []
             pl = with_worst(found)
-            jobs = run.jobs("robust-coeff", sl, eps_i, rate, pl) + \
-                (run.jobs("robust-coeff", sl, eps_i, low, pl) if margin > 1 else [])
-            rows = run.run(jobs, f"robust-coeff, eps_i {eps_i:.4g}")
+            loop = _loop(found, margin, low)
+            if loop is not None:
+                rows = []
+            else:
+                jobs = run.jobs("robust-coeff", sl, eps_i, rate, pl) + \
+                    (run.jobs("robust-coeff", sl, eps_i, low, pl) if margin > 1 else [])
+                rows = run.run(jobs, f"robust-coeff, eps_i {eps_i:.4g}")
             rc = summarize([r for r in rows if r["rate_hz"] == float(rate)])
             rc_low = summarize([r for r in rows if r["rate_hz"] == float(low)]) if margin > 1 else rc
             res.baselines["robust-coeff"] = {
                 **rc, "eps_i": float(eps_i), "at_low": rc_low, "clean_low": bool(rc_low["clean"]),
-                "worst": found[0] if found else None, "decided_by": deciding(rows, {e["spec"] for e in found}),
+                "worst": found[0] if found else None, "decided_by": loop or deciding(rows, {e["spec"] for e in found}),
                 "model_T_lambda": hard.model_gain(sl, rho_i=rho_i, eps_i=eps_i) if hard is not None else None}
             res.eps_i = float(eps_i)
             if rc["clean"] and rc_low["clean"]:

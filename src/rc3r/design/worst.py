@@ -365,33 +365,30 @@ def search_ellipsoid(search: Search, realise, G, rate: float, *, delay: int = 0,
 
 class Hardest:
     """The worst-plant search of a design (:mod:`rc3r.design.worst`) on its bounds: a box of standard
-    parameters (searched corner by corner), a payload range (its two ends, exact; with the URDF's uncertainty
-    the corners of its box around the lighter end), an identified ellipsoid (its lightest points along the
-    worst directions, closed form)."""
+    parameters (searched corner by corner), a payload range (its two ends, exact), an identified ellipsoid
+    (its lightest points along the worst directions, closed form); with the URDF's own uncertainty
+    (:mod:`rc3r.uncertainty.urdf`) the arm at its lightest plant ``urdf-lower`` (exact: the lightest of the
+    set in every direction) and its heaviest ``urdf-upper``, the box's corners searched around the lightest."""
 
     def __init__(self, cfg, spec, sp, rate, delay):
+        from ..uncertainty.urdf import URDFSet, parse_spec
+
         self.rate, self.delay = float(rate), int(delay)
         self.search = Search(spec.robot_model, sp, spec.trajectory)
-        self.kind, self.box, self.ends, self.prefix = "off", None, {}, ""
-        f = float(cfg.get("plant", {}).get("urdf_uncertainty", 0.0))
-        ubox = None
-        if f > 0:
-            from ..uncertainty.box import urdf_box
-
-            ubox = urdf_box(spec.robot_model, f)
-        self.urdf_uncertainty = f
+        self.kind, self.box, self.ends, self.suffix = "off", None, {}, ""
+        self.masses: dict = {}  # spec -> M_p (N, n, n) of the plants the last search returned
+        self._found: list = []
+        u = parse_spec(cfg.get("plant", {}).get("urdf_uncertainty"))
+        self.urdf = URDFSet(spec.robot_model, u) if u is not None else None
         if cfg.get("payload"):
             from ..plant_sets import _payload, _payload_plant
 
             pay = _payload(cfg["payload"]["mass"], cfg["payload"].get("com"))
             self.kind = "payload"
-            self.ends = {e: _payload_plant(spec.robot_model, pay, e).theta for e in ("lower", "upper")}
-            if ubox is not None:  # the corners of the URDF's uncertainty around the lightest end
-                from ..uncertainty.payload import with_payload
-
-                lower = with_payload(spec.robot_model, pay[0][0], pay[1], label="lower")
-                self.search = Search(lower, sp, spec.trajectory)
-                self.kind, self.box, self.prefix = "payload + URDF uncertainty", ubox, "lower+"
+            ends = ("lower", "upper") if self.urdf is None else ("lower+urdf-lower", "upper+urdf-upper", "lower")
+            self.ends = {e: _payload_plant(spec.robot_model, pay, e, self.urdf).theta for e in ends}
+            if self.urdf is not None:
+                self.kind = "payload + URDF uncertainty"
         elif cfg.get("bounds"):  # the identified ellipsoid: its lightest points along the worst directions
             from ..identify.bounds_file import load_bounds
             from ..plant_sets import _bounds_plant
@@ -403,12 +400,12 @@ class Hardest:
                          for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
         else:
             from ..plant_sets import resolve_box
-            from ..uncertainty.box import widened
 
-            box = resolve_box(spec.robot_model, cfg.get("box"))
-            self.kind, self.box = "box", box if ubox is None else widened(box, ubox)
-            if ubox is not None:
-                self.kind = "box + URDF uncertainty"
+            self.kind, self.box = "box", resolve_box(spec.robot_model, cfg.get("box"))
+            if self.urdf is not None:  # the box's corners around the arm's lightest plant
+                self.kind, self.suffix = "box + URDF uncertainty", "+urdf-lower"
+                self.search = Search(self.urdf.end("lower"), sp, spec.trajectory)
+                self.upper = self.search.mass(self.urdf.end("upper").theta)
 
     def gains(self, sliding, **w):
         return loop_gains(self.search, sliding, **w)
@@ -417,23 +414,72 @@ class Hardest:
         """T max_t lambda_max(M_0^-1 G): the rule's own figure on the controller's model."""
         return float(np.max(plant_gain(self.gains(sliding, **w), self.search.M0)[0]) / self.rate)
 
+    def _entry(self, spec, Mp, G, why):
+        lam, _ = plant_gain(G, Mp)
+        k = int(np.argmax(lam))
+        self.masses[spec] = Mp
+        return {"spec": spec, "T_lambda": float(lam[k] / self.rate), "t": float(self.search.sp.t[k]),
+                "limit": stability_limit(self.delay), "why": why}
+
     def plants(self, sliding, **w) -> list[dict]:
-        """The hardest plants for the law's gains (most demanding first, at most 3)."""
+        """The hardest plants for the law's gains (most demanding first; at most 3, and the heaviest arm)."""
         G = self.gains(sliding, **w)
-        if self.kind == "ellipsoid":
-            return search_ellipsoid(self.search, self.realise, G, self.rate, delay=self.delay, pool=self.pool)[:3]
+        self.masses = {}
+        if self.kind == "ellipsoid":  # M_p realised on demand (eps_factor): the closed form's points cost a fit
+            self._found = search_ellipsoid(self.search, self.realise, G, self.rate, delay=self.delay, pool=self.pool)[:3]
+            return self._found
         if self.box is not None:
-            found = search_box(self.search, self.box, G, self.rate, delay=self.delay)
-            if self.prefix:  # corners of the arm around the payload's lightest end
-                found = [{**e, "spec": "lower" if e["spec"] == "nominal" else self.prefix + e["spec"]}
-                         for e in found]
-            return found[:3]
-        out = []
-        for end, theta in self.ends.items():
-            lam, _ = plant_gain(G, self.search.mass(theta))
-            k = int(np.argmax(lam))
-            out.append({"spec": end, "T_lambda": float(lam[k] / self.rate), "t": float(self.search.sp.t[k]),
-                        "limit": stability_limit(self.delay),
-                        "why": f"the payload's {end} end (M grows with the mass: the lower end is the lightest "
-                               "in every direction)"})
+            found = search_box(self.search, self.box, G, self.rate, delay=self.delay)[:3]
+            if self.suffix:  # corners of the box around the arm's lightest plant, and the heaviest arm
+                found = [{**e, "spec": e["spec"] + self.suffix} for e in found]
+            for e in found:
+                self.masses[e["spec"]] = self._mass_of(e["spec"])
+            if self.suffix:
+                found.append(self._entry("nominal+urdf-upper", self.upper, G, "the arm's heaviest plant of the "
+                                         "URDF uncertainty (every link at its upper factor)"))
+            return sorted(found, key=lambda e: -e["T_lambda"])
+        why = {"lower": "the payload's lower end (M grows with the mass: the lightest in every direction)",
+               "upper": "the payload's upper end (the heaviest)",
+               "lower+urdf-lower": "the lightest plant of the set in every direction (exact maximiser): the payload's "
+                                   "lower end, every link at its lower factor of the URDF uncertainty",
+               "upper+urdf-upper": "the heaviest plant: the payload's upper end, every link at its upper factor"}
+        if self.urdf is not None:
+            why["lower"] = "the URDF's own arm at the payload's lower end (the bounds' lightest plant)"
+        out = [self._entry(end, self.search.mass(theta), G, why[end]) for end, theta in self.ends.items()]
         return sorted(out, key=lambda e: -e["T_lambda"])
+
+    def _mass_of(self, spec):
+        from ..uncertainty.box import perturb
+
+        box_spec, _, arm = spec.partition("+")
+        base = self.search.nominal if not arm else self.urdf.plant(arm)
+        plant = base if box_spec == "nominal" else perturb(base, self.box, box_spec)
+        return self.search.mass(plant.theta)
+
+    def eps_factor(self, sliding, rate: float, **w) -> float:
+        """The smallest factor f on the law's boundary layers (eps or eps_i) for which the held loop at ``rate``
+        is stable on every plant the last :meth:`plants` returned (``T lambda_max(M_p^-1 G) <`` the limit);
+        inf if no boundary layer is thick enough (K and b M0 alone reach the limit: a higher rate is needed)."""
+        if not self.masses and self.kind == "ellipsoid":
+            self.masses = {e["spec"]: self.search.mass(self.realise(e["spec"]).theta) for e in self._found}
+        if not self.masses:
+            return 1.0
+        G = self.gains(sliding, **w)
+        G0 = self.gains({**sliding}, rho=0.0, eps=1.0)  # K + b M0: the robust term's layer infinitely thick
+        R = G - G0
+        limit, T = stability_limit(self.delay), 1.0 / float(rate)
+
+        def top(f):
+            return max(T * float(np.max(plant_gain(G0 + R / f, Mp)[0])) for Mp in self.masses.values())
+
+        if top(1e12) >= limit:
+            return float("inf")
+        lo, hi = 1e-6, 1.0
+        while top(hi) >= limit:
+            lo, hi = hi, hi * 2.0
+        for _ in range(50):
+            mid = np.sqrt(lo * hi)
+            lo, hi = (mid, hi) if top(mid) >= limit else (lo, mid)
+            if hi / lo < 1.001:
+                break
+        return float(hi)

@@ -442,23 +442,3 @@ def _perturb(robot, box: Box, spec, simulable: bool):
                 return out
         raise ParameterError(f"perturbation {spec!r}: no simulable robot in 10000 draws from the box")
     raise ConfigError(f"bad perturbation {spec!r}: expected {PERTURBATIONS}")
-
-
-def urdf_box(robot, fraction: float) -> Box:
-    """The URDF's own uncertainty as a box: every standard parameter of every link may be ``fraction`` of
-    its magnitude lighter or heavier (``[-f |p_j|, +f |p_j|]``; 0: exact). Bounds that trust a URDF (a
-    payload range, a box around its values) do not cover it: ``rc3r design`` verifies with it
-    (docs/design.md, "URDF uncertainty")."""
-    f = float(fraction)
-    if not (np.isfinite(f) and 0.0 <= f < 1.0):
-        raise ConfigError(f"URDF uncertainty must be a fraction in [0, 1), got {fraction!r}")
-    std = np.abs(np.asarray(robot.standard_parameters(), dtype=float))
-    return Box(-f * std, f * std, tuple(robot.standard_parameter_names),
-               source=f"URDF uncertainty +-{f:g} x |value| on every standard parameter")
-
-
-def widened(box: Box, extra: Box) -> Box:
-    """``box`` with ``extra``'s deltas added to both ends (the same parameters)."""
-    return Box(box.lower + extra.lower, box.upper + extra.upper, box.names,
-               source=f"{box.source}, widened by {extra.source}")
-
