@@ -62,8 +62,9 @@ def design_config(config: dict | None = None, **options) -> dict:
     line's ``options`` written into it (``robot``, ``urdf``, ``lock``, ``payload`` (lo, hi), ``payload_com``,
     ``box``, ``bounds``, ``friction``, ``torque_limit``, ``noise``, ``delay``, ``duration``, ``tolerance``,
     ``urdf_uncertainty``: ``[plant] urdf_uncertainty``, a spec of :func:`rc3r.uncertainty.urdf.parse_spec`,
-    default :data:`URDF_UNCERTAINTY` for bounds that trust the URDF (a payload range, a box), none for an
-    identification's ``bounds``; ``off`` or 0 disables it).
+    default :data:`URDF_UNCERTAINTY` for bounds that trust the URDF (a payload range, a ``box`` around its
+    values), none for a robot's own stated uncertainty (its ``default_box``: the paper's box of the 3R) and
+    for an identification's ``bounds``; ``off`` or 0 disables it).
 
     Gains are what a design chooses: a config with ``[gains]`` or ``[controller]`` gains is refused.
     """
@@ -103,7 +104,11 @@ def design_config(config: dict | None = None, **options) -> dict:
 
     f = options.get("urdf_uncertainty")
     if f is None:
-        f = plant.get("urdf_uncertainty", URDF_UNCERTAINTY)
+        # the default only where the bounds trust a URDF's values (a payload range, a box around them);
+        # a robot's own stated uncertainty (the paper's box of the 3R, section 4) and an identification's
+        # bounds already say how wrong the model may be
+        trusts_urdf = cfg.get("payload") is not None or cfg.get("box") is not None
+        f = plant.get("urdf_uncertainty", URDF_UNCERTAINTY if trusts_urdf else None)
     f = parse_spec(f)
     if cfg.get("bounds") or f is None:  # identified bounds do not trust the URDF
         plant.pop("urdf_uncertainty", None)
