@@ -18,8 +18,8 @@ COMPILED = [c for c in registered() if c.compiled]
 
 
 def test_the_registry_holds_the_built_in_effects():
-    assert {"friction", "saturation", "limits"} <= set(EFFECTS)
-    assert [c.name for c in COMPILED][:2] == ["friction", "saturation"]
+    assert {"friction", "saturation", "stribeck", "limits"} <= set(EFFECTS)
+    assert [c.name for c in COMPILED][:3] == ["friction", "saturation", "stribeck"]
     codes = [c.code for c in COMPILED]
     assert len(set(codes)) == len(codes) and all(isinstance(c, int) and c > 0 for c in codes)
 

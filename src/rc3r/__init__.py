@@ -66,6 +66,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.plants.base``                   the plant contract, :class:`Effect`, :class:`Layout`, the effect registry
 ``rc3r.plants.friction``               viscous, smooth Coulomb and offset joint friction: class, layout, kernels, config
 ``rc3r.plants.saturation``             actuator torque limits (URDF effort or config): class, layout, kernels
+``rc3r.plants.stribeck``               Stribeck friction, the worked example of a compiled effect in one file
 ``rc3r.plants.limits``                 joint position/velocity limits, reported when crossed (a monitor)
 ``rc3r.plants.loop``                   sensor noise, quantization, delay, initial error of a sampled loop
 ``rc3r.plants._kernels``               an effect layout's slot arithmetic and the loop's measurement (numba)

@@ -2,8 +2,8 @@
 
 * :class:`Plant` -- a rigid body (:class:`~rc3r.robots.base.Robot`) and effects;
 * :class:`Friction` (:mod:`.friction`), :class:`Saturation` (:mod:`.saturation`),
-  :class:`JointLimits` (:mod:`.limits`, a monitor) -- the registered effects (:data:`EFFECTS`),
-  each one module from its class to its compiled kernels;
+  :class:`Stribeck` (:mod:`.stribeck`), :class:`JointLimits` (:mod:`.limits`, a monitor) -- the
+  registered effects (:data:`EFFECTS`), each one module from its class to its compiled kernels;
 * :class:`LoopEffects` (:mod:`.loop`) -- noise, quantization, delay, initial error of a
   sampled controller;
 * :class:`~rc3r.plants.mujoco.MujocoRigidBody` -- MuJoCo as the rigid body (optional extra).
@@ -25,10 +25,11 @@ from .base import EFFECTS, Effect, Layout, Option, Plant, as_plant, pair as _pai
 from .friction import Friction
 from .saturation import Saturation
 from .limits import JointLimits, crossings  # noqa: I001 - registration order, not the alphabet
+from .stribeck import Stribeck
 from .loop import LoopEffects
 
 __all__ = ["Plant", "Effect", "EFFECTS", "register_effect", "as_plant", "Friction", "Saturation",
-           "JointLimits", "crossings", "LoopEffects", "build_effects", "build_loop", "resolve",
+           "JointLimits", "Stribeck", "crossings", "LoopEffects", "build_effects", "build_loop", "resolve",
            "PLANT_KEYS", "PLANT_ENGINES", "LOOP_KEYS", "Layout", "Option", "registered", "effect_keys"]
 
 #: Rigid-body engines of a plant (``--plant-engine``).
