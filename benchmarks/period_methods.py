@@ -35,6 +35,7 @@ def main(argv=None) -> int:
     import rc3r
     from rc3r.plants import Friction
     from rc3r.simulate import simulate
+    from rc3r.simulate._fast import simulator
 
     print(f"# period methods, {time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime())} UTC, rate {args.rate:g} Hz, "
           f"duration {args.duration:g} s, friction x{args.scale:g}, Coulomb x{args.coulomb:g}")
@@ -52,7 +53,7 @@ def main(argv=None) -> int:
                         if e.name == "friction" else e for e in P.effects)
             P = Plant(P.rigid, eff, label=P.label)
         res = simulate(P, spec.law, spec.trajectory, spec.options)
-        eng = P.rigid.fast_engine
+        eng = simulator(P.rigid)
         mod = eng.instance
         kc = eng.constants(P.rigid); fx = P.pack(); wk = mod._make_work(kc); n = P.n; n2 = 2 * n
         fric = mod._friction(fx, n)

@@ -293,3 +293,22 @@ if __name__ == "__main__":
     if sys.argv[1:] != ["--update"]:
         sys.exit("usage: python tests/test_docs.py --update  (rewrite the checked console transcripts)")
     _update()
+
+
+def test_the_compiled_effect_example_of_architecture_md_is_one_registered_file():
+    """docs/architecture.md, "Adding a compiled plant effect", names its worked example's file: it exists, it
+    registers a compiled effect with a layout, both kernels, a config key and a CLI option, and the package
+    names it nowhere else but in the import that registers it (one file)."""
+    from rc3r.plants import EFFECTS
+
+    text = (DOCS / "architecture.md").read_text()
+    section = text.split("## Adding a compiled plant effect", 1)[1].split("\n## ", 1)[0]
+    path = re.search(r"`(src/rc3r/plants/\w+\.py)`", section).group(1)
+    file = DOCS.parent / path
+    assert file.is_file(), path
+    module = "rc3r.plants." + file.stem
+    cls = next(c for c in EFFECTS.values() if c.__module__ == module)
+    assert cls.compiled and cls.LAYOUT and cls.value_kernel and cls.slope_kernel and cls.config_keys and cls.cli
+    src = DOCS.parent / "src" / "rc3r"
+    named = [p for p in src.rglob("*.py") if p != file and re.search(rf"\b{file.stem}\b", p.read_text())]
+    assert {p.relative_to(src).as_posix() for p in named} <= {"plants/__init__.py", "__init__.py"}, named

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import rc3r
-from rc3r.plants import as_plant
+from rc3r.plants import Friction, Plant, Saturation, as_plant
 from rc3r.simulate import _initial_state
 from rc3r.simulate._fast import simulator
 from rc3r.simulate.engines._jacobian import work
@@ -42,7 +42,7 @@ def _f(mod, t, x, kc, fx, code, cp, tp, n):
     p = int(cp[0])
     F = np.empty(x.size)
     u, ref, Y, xi, v, a, r, w, ys = _scratch(n, p)
-    fric = bool(np.any(fx[:3 * n] != 0.0))
+    fric = mod._friction(fx, n)
     ok = mod.closed_loop_rhs(t, x, kc, mod._make_work(kc), fx, fric, code, cp, tp, F, u, ref, Y, xi, v, a, r, w, ys, True)
     assert ok
     return F, u, ys[0], Y.T @ r
@@ -72,6 +72,15 @@ def _central(mod, t, x, kc, fx, code, cp, tp, n):
     return J, Ft
 
 
+def clipped_friction(mod, t, x, kc, fx, code, cp, tp, rigid, friction):
+    """``fx`` of the plant ``rigid`` with ``friction`` and a torque limit that clips joint 1 at (t, x), not the others."""
+    n = rigid.n
+    u = _f(mod, t, x, kc, fx, code, cp, tp, n)[1]
+    lim = 2.0 * np.abs(u) + 1.0
+    lim[0] = 0.5 * abs(u[0])  # joint 1 saturated, the others not
+    return Plant(rigid, [friction, Saturation(lim)]).pack()
+
+
 CASES = {  # name: (controller, eps, state offset from the reference's initial state)
     "fbl": ("fbl", None, 0.3),
     "pd": ("pd", None, 0.3),
@@ -92,11 +101,8 @@ def test_analytic_jacobian_equals_central_differences(case, plant, rng):
     x = x0 + off * rng.uniform(-1, 1, x0.size)
     t = 0.37
     if plant == "friction-and-clip":
-        fx = fx.copy()
-        fx[0:n], fx[n:2 * n], fx[3 * n] = [0.4, 0.3, 0.2], [2.0, 1.5, 1.0], 0.05  # viscous, Coulomb, v_s
-        u = _f(mod, t, x, kc, fx, code, cp, tp, n)[1]
-        fx[3 * n + 1:] = 2.0 * np.abs(u) + 1.0
-        fx[3 * n + 1] = 0.5 * abs(u[0])  # joint 1 saturated, the others not
+        fx = clipped_friction(mod, t, x, kc, fx, code, cp, tp, spec.plant, Friction([0.4, 0.3, 0.2], [2.0, 1.5, 1.0],
+                                                                                     v_s=0.05))
     ok, J, Ft = _analytic(mod, t, x, kc, fx, code, cp, tp, n)
     assert ok
     Jc, Ftc = _central(mod, t, x, kc, fx, code, cp, tp, n)
@@ -142,10 +148,10 @@ def test_warm_jacobian_equals_cold(case, rng):
     spec, mod, n, cp, tp, code, kc, fx, x0 = _setup(controller, eps)
     x = x0 + off * rng.uniform(-1, 1, x0.size)
     t, p, N = 0.37, int(cp[0]), x0.size
-    fx = fx.copy()
     u0 = _f(mod, t, x, kc, fx, code, cp, tp, n)[1]
-    fx[3 * n + 1:] = 2.0 * np.abs(u0) + 1.0
-    fx[3 * n + 1] = 0.5 * abs(u0[0])
+    lim = 2.0 * np.abs(u0) + 1.0
+    lim[0] = 0.5 * abs(u0[0])
+    fx = Plant(spec.plant, [Saturation(lim)]).pack()
     ok, J, Ft = _analytic(mod, t, x, kc, fx, code, cp, tp, n)
     wk = mod._make_work(kc)
     S = _scratch(n, p)

@@ -167,13 +167,15 @@ def test_limit_crossings_by_hand():
 
 
 def test_pack_layout_by_hand():
-    """The compiled engines' fields: [viscous, coulomb, offset, v_s, u_max] per joint, zeros and inf
-    without effects (the rigid plant's arithmetic is then the identity)."""
+    """The compiled engines' effects: ``[m, code, offset, ...]`` then each effect's block in the order of its
+    LAYOUT (friction: viscous, coulomb, offset per joint, v_s; saturation: the limit per joint); a rigid plant,
+    or one whose friction is zero, is ``[0]`` (its arithmetic is then the rigid body's)."""
     arm = rc3r.load_robot()
-    np.testing.assert_array_equal(Plant(arm).pack(), [0.0] * 9 + [1.0] + [np.inf] * 3)
+    np.testing.assert_array_equal(Plant(arm).pack(), [0.0])
+    np.testing.assert_array_equal(Plant(arm, [Friction(np.zeros(3))]).pack(), [0.0])
     plant = Plant(arm, [Friction([1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0], v_s=0.5),
                         Saturation([10.0, 20.0, 30.0])])
-    np.testing.assert_array_equal(plant.pack(), [1, 2, 3, 4, 5, 6, 7, 8, 9, 0.5, 10, 20, 30])
+    np.testing.assert_array_equal(plant.pack(), [2, 1, 5, 2, 15, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0.5, 10, 20, 30])
     assert plant.effect("saturation").limit.tolist() == [10.0, 20.0, 30.0] and plant.effect("nope") is None
 
 

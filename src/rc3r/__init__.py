@@ -64,12 +64,13 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.identify.pipeline``             :func:`identify`: log to theta, friction, covariance, validation, bounds
 ``rc3r.identify.figures``              held-out torques and residuals of an identification
 ``rc3r.plants``                        the true system: :class:`Plant` = rigid body + effects, loop effects
-``rc3r.plants.base``                   the plant contract, :class:`Effect`, the effect registry
-``rc3r.plants.friction``               viscous, smooth Coulomb and offset joint friction (URDF or config)
-``rc3r.plants.saturation``             actuator torque limits (URDF effort or config)
+``rc3r.plants.base``                   the plant contract, :class:`Effect`, :class:`Layout`, the effect registry
+``rc3r.plants.friction``               viscous, smooth Coulomb and offset joint friction: class, layout, kernels, config
+``rc3r.plants.saturation``             actuator torque limits (URDF effort or config): class, layout, kernels
+``rc3r.plants.stribeck``               Stribeck friction, the worked example of a compiled effect in one file
 ``rc3r.plants.limits``                 joint position/velocity limits, reported when crossed (a monitor)
 ``rc3r.plants.loop``                   sensor noise, quantization, delay, initial error of a sampled loop
-``rc3r.plants._kernels``               the compiled effects (fields every compiled engine applies)
+``rc3r.plants._kernels``               an effect layout's slot arithmetic and the loop's measurement (numba)
 ``rc3r.plants.mujoco``                 MuJoCo as the plant's rigid body (optional extra)
 ``rc3r.simulate``                      :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
 ``rc3r.simulate._fast``                the compiled engine's driver: one instantiation per kernel supply
@@ -77,6 +78,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.engines.base``         the engine contract, the registry (``ENGINES``), the built-in engines
 ``rc3r.simulate.engines.compiled``     Rosenbrock (ode23s, ROS4, RODAS) and ZOH (RK4, RODAS or ROS4 periods) integrators, any n, p (numba)
 ``rc3r.simulate.engines._template``    the kernel supply contract, as stubs
+``rc3r.simulate.engines._effects``     the plant-effect dispatch, generated from ``EFFECTS`` per instantiation
 ``rc3r.simulate.engines._linalg``      dense LU of the compiled integrators (kernel-independent)
 ``rc3r.simulate.engines._jacobian``    the closed loop's analytic Jacobian by the chain rule (kernel-independent)
 ``rc3r.simulate.engines._tableaux``    the ROS4 and RODAS tables of those integrators (plain constants)

@@ -32,6 +32,7 @@ import numpy as np
 from .controllers import LAWS, make_law
 from .errors import ConfigError, ParameterError
 from .io import floats as _floats
+from .plants import PLANT_KEYS
 from .robots import DEFAULT_ROBOT, load_robot
 from .simulate import SimOptions, SimResult, simulate
 from .simulate.metrics import run_metrics
@@ -73,8 +74,7 @@ CONFIG_KEYS = {
          "trajectory", "simulation", "tolerance", "design"),
     "payload": ("mass", "com"),
     "design": ("verified", "law", "rate", "margin", "worst_plant", "loop_gain", "note"),
-    "plant": ("spec", "urdf", "box", "urdf_uncertainty", "friction", "torque_limit", "limits", "noise", "quantization", "delay",
-              "q0_error", "qd0_error", "noise_seed", "engine"),
+    "plant": ("spec", "urdf", "box", "urdf_uncertainty") + PLANT_KEYS,  # the effects' keys, live
     "model": ("theta", "rho"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
     "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "period_rtol", "period_atol", "nsub",
@@ -245,7 +245,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
               payload=None, payload_com=None, config: dict | None = None, name: str | None = None,
               urdf=None, lock: dict | None = None, friction=None, torque_limit=None, noise=None, delay=None,
               plant_engine: str | None = None, tolerance: float | None = None, plant_rng=None,
-              bounds: str | None = None) -> RunSpec:
+              bounds: str | None = None, effects: dict | None = None) -> RunSpec:
     """Resolve a run from keyword options (command line) over a config dict (TOML).
 
     Keyword options win over the config; both over the defaults (the robot's
@@ -257,7 +257,9 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     ``urdf`` (and ``lock``, ``{joint: value}``) read the nominal robot from a URDF (any serial arm
     through Pinocchio unless ``robot`` names a closed-form one). ``friction``, ``torque_limit``,
     ``noise``, ``delay``, ``plant_engine`` and the ``[plant]`` table's effect keys build the true
-    plant and its loop (:func:`rc3r.plants.resolve`); ``tolerance`` [rad] is the verdict's.
+    plant and its loop (:func:`rc3r.plants.resolve`); ``effects`` (``[plant]`` keys of registered effects,
+    e.g. the command line's, :func:`rc3r.cli.run.plant_options`) win over the table's; ``tolerance`` [rad] is
+    the verdict's.
     ``bounds`` (or config ``bounds``) is a ``bounds.toml`` of ``rc3r identify``: the controller's
     theta_0, rho, rho_i and ellipsoid P come from it (:func:`_file_model`); the plant is the nominal
     robot, a URDF, or drawn from the file's ellipsoid (``centre``, ``random:<seed>``,
@@ -344,8 +346,10 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
 
     if plant_rng is None:  # uncertain plant effects (friction ranges) are drawn with the plant's own seed
         plant_rng = np.random.default_rng(seed)
-    true_plant, loop, _ = resolve(the_plant, plant_cfg, seed=seed, rng=plant_rng, friction=friction,
-                                  torque_limit=torque_limit, noise=noise, delay=delay, plant_engine=plant_engine)
+    given = dict(effects or {}, **{k: v for k, v in (("friction", friction), ("torque_limit", torque_limit))
+                                   if v is not None})
+    true_plant, loop, _ = resolve(the_plant, plant_cfg, seed=seed, rng=plant_rng, noise=noise, delay=delay,
+                                  plant_engine=plant_engine, **given)
     if loop is not None and loop.active and opts.rate is None:
         raise ConfigError("sensor noise, quantization and delay act on a sampled controller: give a rate (--rate HZ)")
     table = dict(cfg.get("gains", {}).get(kind, {}))

@@ -98,35 +98,26 @@ def urdf_path(text):
     return str(resolve_erd(text))
 
 
-def _urdf_or_number(text):
-    if text == "urdf":
-        return text
-    try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'urdf' or a number, got {text!r}") from None
-    if not (math.isfinite(x) and x > 0):
-        raise argparse.ArgumentTypeError(f"must be finite and > 0, got {text}")
-    return x
-
-
-def _two_nonnegative(text, form: str) -> str:
-    """``A:B`` with finite A, B >= 0, normalised to ``repr(A):repr(B)``; ``form`` names it in the error."""
-    try:
-        a, b = (float(x) for x in text.split(":"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected {form}, got {text!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b) and a >= 0 and b >= 0):
-        raise argparse.ArgumentTypeError(f"expected finite {form.split(' or ')[-1]} >= 0, got {text!r}")
-    return f"{a!r}:{b!r}"
-
-
-def _friction(text):
-    return text if text == "urdf" else _two_nonnegative(text, "'urdf' or VISCOUS:COULOMB")
-
-
 def _noise(text):
-    return _two_nonnegative(text, "SIGMA_Q:SIGMA_QD")
+    from ..plants.base import nonnegative_numbers
+
+    try:
+        return nonnegative_numbers(text, "SIGMA_Q:SIGMA_QD")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _effect_type(option):
+    """argparse's ``type`` for a plant effect's :class:`~rc3r.plants.base.Option`: its parse, a ValueError
+    turned into argparse's one-line error."""
+    def parse(text):
+        try:
+            return option.parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = option.dest  # argparse names a failed type by it
+    return parse
 
 
 def plant_args(p, robot_help: bool = True) -> None:
@@ -137,10 +128,11 @@ def plant_args(p, robot_help: bool = True) -> None:
                             "3R's closed form)")
         p.add_argument("--lock", type=_lock, action="append", metavar="JOINT=VALUE",
                        help="fix a joint of the URDF at VALUE (repeatable; fingers, mimic joints)")
-    p.add_argument("--torque-limit", type=_urdf_or_number, metavar="urdf|NM",
-                   help="actuator saturation: the URDF's effort limits or one limit [N m] for every joint")
-    p.add_argument("--friction", type=_friction, metavar="urdf|VISCOUS:COULOMB",
-                   help="joint friction of the plant: the URDF's <dynamics damping friction> or values [N m s/rad]:[N m]")
+    from ..plants import registered
+
+    for cls in registered():  # every registered effect's own options (rc3r.plants.base.Effect.cli)
+        for opt in cls.cli:
+            p.add_argument(opt.flag, dest=opt.dest, type=_effect_type(opt), metavar=opt.metavar, help=opt.help)
     p.add_argument("--noise", type=_noise, metavar="SIGMA_Q:SIGMA_QD",
                    help="sensor noise std on q [rad] and qd [rad/s] (sampled runs; seeded by the run's seed)")
     p.add_argument("--delay", type=_positive(int, allow_zero=True), metavar="SAMPLES",

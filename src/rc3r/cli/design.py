@@ -134,9 +134,12 @@ def cmd_design(args) -> int:
     cfg = {} if args.config is None else read_config(args.config)
     opts = plant_options(args)
     cfg = design_config(cfg, robot=args.robot, urdf=opts["urdf"], lock=opts["lock"], payload=args.payload,
-                        payload_com=args.payload_com, box=args.box, bounds=args.bounds, friction=opts["friction"],
-                        torque_limit=opts["torque_limit"], noise=opts["noise"], delay=opts["delay"],
+                        payload_com=args.payload_com, box=args.box, bounds=args.bounds,
+                        friction=opts["effects"].pop("friction", None),
+                        torque_limit=opts["effects"].pop("torque_limit", None), noise=opts["noise"], delay=opts["delay"],
                         duration=args.duration, tolerance=opts["tolerance"], urdf_uncertainty=args.urdf_uncertainty)
+    if opts["effects"]:  # the other registered effects' options
+        cfg.setdefault("plant", {}).update(opts["effects"])
     if opts.get("plant_engine"):
         cfg.setdefault("plant", {})["engine"] = opts["plant_engine"]
     first = build_run(controller="robust", config=cfg, rate=args.rate, eps=1.0)  # bad input refused here

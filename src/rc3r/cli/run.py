@@ -90,11 +90,17 @@ def verdict_text(m: dict) -> str:
 
 
 def plant_options(args) -> dict:
-    """The arm and plant keywords of :func:`rc3r.build_run` from the options of :func:`rc3r.cli.plant_args`."""
-    out = {k: getattr(args, k, None) for k in ("urdf", "friction", "torque_limit", "noise", "delay",
-                                               "plant_engine", "tolerance", "bounds")}
+    """The arm and plant keywords of :func:`rc3r.build_run` from the options of :func:`rc3r.cli.plant_args`.
+
+    ``effects`` holds the ``[plant]`` keys the registered effects' options set (:attr:`rc3r.plants.Effect.cli`:
+    ``--friction`` -> ``friction``, ``--torque-limit`` -> ``torque_limit``, ...), only those given."""
+    from ..plants import registered
+
+    out = {k: getattr(args, k, None) for k in ("urdf", "noise", "delay", "plant_engine", "tolerance", "bounds")}
     locks = getattr(args, "lock", None)
     out["lock"] = dict(locks) if locks else None
+    out["effects"] = {o.key: getattr(args, o.dest) for c in registered() for o in c.cli
+                      if getattr(args, o.dest, None) is not None}
     return out
 
 

@@ -145,8 +145,8 @@ def _config(args) -> dict:
         if getattr(args, "payload_com", None) is not None:
             cfg["payload"]["com"] = list(args.payload_com)
     plant = dict(cfg.get("plant", {}))
-    for key, name in (("friction", "friction"), ("torque_limit", "torque_limit"), ("noise", "noise"),
-                      ("delay", "delay"), ("plant_engine", "engine")):
+    plant.update(opts["effects"])  # the registered effects' options, by their [plant] keys
+    for key, name in (("noise", "noise"), ("delay", "delay"), ("plant_engine", "engine")):
         if opts.get(key) is not None:
             plant[name] = opts[key]
     if plant:

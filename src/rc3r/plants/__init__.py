@@ -2,54 +2,95 @@
 
 * :class:`Plant` -- a rigid body (:class:`~rc3r.robots.base.Robot`) and effects;
 * :class:`Friction` (:mod:`.friction`), :class:`Saturation` (:mod:`.saturation`),
-  :class:`JointLimits` (:mod:`.limits`, a monitor) -- the registered effects (:data:`EFFECTS`);
+  :class:`Stribeck` (:mod:`.stribeck`), :class:`JointLimits` (:mod:`.limits`, a monitor) -- the
+  registered effects (:data:`EFFECTS`), each one module from its class to its compiled kernels;
 * :class:`LoopEffects` (:mod:`.loop`) -- noise, quantization, delay, initial error of a
   sampled controller;
 * :class:`~rc3r.plants.mujoco.MujocoRigidBody` -- MuJoCo as the rigid body (optional extra).
 
-:func:`plant_options` turns the command line's and a ``[plant]`` table's options into
-effects (``docs/control.md``, "Plants").
+:func:`resolve` turns the command line's and a ``[plant]`` table's options into effects
+(``docs/control.md``, "Plants"): every registered effect reads its own keys
+(:attr:`Effect.config_keys`, ``[plant.<name>]``) and declares its command-line option
+(:attr:`Effect.cli`), so :data:`EFFECTS` drives both.
 """
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
 from ..errors import ConfigError
-from .base import EFFECTS, Effect, Plant, as_plant, register_effect
+from .base import EFFECTS, Effect, Layout, Option, Plant, as_plant, pair as _pair, register_effect
+# the built-in effects register in this order (EFFECTS' order; a plant applies them by code, :func:`registered`)
 from .friction import Friction
-from .limits import JointLimits, crossings
-from .loop import LoopEffects
 from .saturation import Saturation
+from .limits import JointLimits, crossings  # noqa: I001 - registration order, not the alphabet
+from .stribeck import Stribeck
+from .loop import LoopEffects
 
 __all__ = ["Plant", "Effect", "EFFECTS", "register_effect", "as_plant", "Friction", "Saturation",
-           "JointLimits", "crossings", "LoopEffects", "build_effects", "build_loop", "resolve", "PLANT_KEYS",
-           "PLANT_ENGINES"]
+           "JointLimits", "Stribeck", "crossings", "LoopEffects", "build_effects", "build_loop", "resolve",
+           "PLANT_KEYS", "PLANT_ENGINES", "LOOP_KEYS", "Layout", "Option", "registered", "effect_keys"]
 
 #: Rigid-body engines of a plant (``--plant-engine``).
 PLANT_ENGINES = ("pinocchio", "mujoco")
 
-#: Keys of a ``[plant]`` configuration table that describe effects (besides spec, urdf, box).
-PLANT_KEYS = ("friction", "torque_limit", "limits", "noise", "quantization", "delay", "q0_error", "qd0_error",
-              "noise_seed", "engine")
+#: Keys of a ``[plant]`` table that describe the sampled loop and the rigid body's engine.
+LOOP_KEYS = ("noise", "quantization", "delay", "q0_error", "qd0_error", "noise_seed", "engine")
 
 
-def _pair(text, what: str):
-    if isinstance(text, str):
-        parts = text.split(":")
-        try:
-            vals = [float(x) for x in parts]
-        except ValueError:
-            raise ConfigError(f"{what} must be A:B (two numbers), got {text!r}") from None
-        if len(vals) != 2:
-            raise ConfigError(f"{what} must be A:B (two numbers), got {text!r}")
-        return vals
-    if isinstance(text, (list, tuple)) and len(text) == 2:
-        return list(text)
-    raise ConfigError(f"{what} must be A:B or [A, B], got {text!r}")
+def registered() -> tuple:
+    """The registered effect classes in the order a plant applies them: compiled effects by code, then
+    the other acting effects, then the monitors."""
+    return tuple(sorted(EFFECTS.values(), key=lambda c: (c.monitor, c.code is None, c.code or 0)))
 
 
-def build_effects(robot, friction=None, torque_limit=None, limits=None, rng=None) -> list[Effect]:
-    """The plant effects of ``robot`` (the rigid body, n joints) from options.
+def effect_keys() -> tuple[str, ...]:
+    """The ``[plant]`` keys of every registered effect (:attr:`Effect.config_keys`), in :func:`registered` order."""
+    return tuple(k for c in registered() for k in c.config_keys)
+
+
+class _Keys(Sequence):
+    """A tuple of ``[plant]`` keys that reads :data:`EFFECTS` each time (an effect registered later is
+    a valid key at once): ``head``, the effects' keys, :data:`LOOP_KEYS`. ``tuple + _Keys`` is one too."""
+
+    def __init__(self, head=()):
+        self._head = tuple(head)
+
+    def _all(self) -> tuple:
+        return self._head + effect_keys() + LOOP_KEYS
+
+    def __getitem__(self, i):
+        return self._all()[i]
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+    def __contains__(self, key) -> bool:
+        return key in self._all()
+
+    def __radd__(self, other):
+        return _Keys(tuple(other) + self._head)
+
+    def __eq__(self, other):
+        return tuple(self) == tuple(other) if isinstance(other, Sequence) else NotImplemented
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        return repr(self._all())
+
+
+#: Keys of a ``[plant]`` configuration table that describe effects (besides spec, urdf, box): every
+#: registered effect's :attr:`~Effect.config_keys`, then :data:`LOOP_KEYS`. Live: read from :data:`EFFECTS`.
+PLANT_KEYS = _Keys()
+
+
+def build_effects(robot, friction=None, torque_limit=None, limits=None, rng=None, **options) -> list[Effect]:
+    """The plant effects of ``robot`` (the rigid body, n joints) from ``[plant]`` options.
+
+    Every registered effect (:data:`EFFECTS`) reads its own keys (:attr:`Effect.config_keys`,
+    :meth:`Effect.from_config`); ``options`` holds the keys of effects beyond the three named here.
 
     Parameters
     ----------
@@ -61,40 +102,24 @@ def build_effects(robot, friction=None, torque_limit=None, limits=None, rng=None
     limits : None, "urdf" or False
         Joint position and velocity limits reported when crossed (default "urdf" when the
         robot's model has any).
+    **options
+        Other effects' keys (``saturation = {limit = ...}``, ``stribeck = {...}``, ...).
     """
+    given = dict(options, friction=friction, torque_limit=torque_limit, limits=limits)
+    known = effect_keys()
+    unknown = sorted(k for k in given if k not in known)
+    if unknown:
+        raise ConfigError(f"[plant]: unknown effect key(s) {', '.join(unknown)} (valid: {', '.join(known)})")
     effects: list[Effect] = []
-    n = robot.n
-    if friction is not None and friction is not False:
-        if friction == "urdf":
-            effects.append(Friction.from_model(robot))
-        elif isinstance(friction, dict):
-            unknown = sorted(set(friction) - {"viscous", "coulomb", "offset", "v_s"})
-            if unknown:
-                raise ConfigError(f"[plant.friction]: unknown key(s) {', '.join(unknown)} "
-                                  "(valid: viscous, coulomb, offset, v_s)")
-            if any(isinstance(v, dict) for v in friction.values()):
-                effects.append(Friction.draw(friction, n, np.random.default_rng(0) if rng is None else rng))
-            else:
-                effects.append(Friction(friction.get("viscous", 0.0), friction.get("coulomb", 0.0),
-                                        friction.get("offset", 0.0), v_s=float(friction.get("v_s", 0.01))))
-        else:
-            fv, fc = _pair(friction, "friction")
-            effects.append(Friction(np.full(n, float(fv)), np.full(n, float(fc))))
-    if torque_limit is not None and torque_limit is not False:
-        if torque_limit == "urdf":
-            effects.append(Saturation.from_model(robot))
-        else:
-            lim = np.asarray(torque_limit, dtype=float) if not isinstance(torque_limit, str) else None
-            if lim is None:
-                try:
-                    lim = np.array(float(torque_limit))
-                except ValueError:
-                    raise ConfigError(f"torque limit must be 'urdf' or N m, got {torque_limit!r}") from None
-            effects.append(Saturation(np.full(n, float(lim)) if lim.ndim == 0 else lim))
-    if limits not in (None, False):
-        if limits != "urdf":
-            raise ConfigError(f"plant limits must be 'urdf' or false, got {limits!r}")
-        effects.append(JointLimits.from_model(robot))
+    for cls in registered():
+        vals = [(k, given[k]) for k in cls.config_keys if given.get(k) is not None and given.get(k) is not False]
+        if len(vals) > 1:
+            raise ConfigError(f"[plant]: {' and '.join(k for k, _ in vals)} both give the {cls.name} effect; "
+                              "give one")
+        if vals:
+            e = cls.from_config(robot, vals[0][0], vals[0][1], rng=rng)
+            if e is not None:
+                effects.append(e)
     return effects
 
 
@@ -148,9 +173,13 @@ def resolve(robot, table: dict | None = None, *, rate=None, seed: int = 0, rng=N
     engine = cfg.pop("plant_engine", cfg.pop("engine", "pinocchio"))
     if engine not in PLANT_ENGINES:
         raise ConfigError(f"plant engine must be one of {', '.join(PLANT_ENGINES)}, got {engine!r}")
-    limits = cfg.get("limits", "urdf" if hasattr(robot, "urdf") and getattr(robot, "urdf", None) else None)
-    effects = build_effects(robot, friction=cfg.get("friction"), torque_limit=cfg.get("torque_limit"),
-                            limits=limits, rng=rng)
+    for cls in registered():  # an effect on by default (the URDF's limits) unless a key of it is given
+        if cls.config_keys and not any(k in cfg for k in cls.config_keys):
+            default = cls.default_config(robot)
+            if default is not None:
+                cfg[cls.config_keys[0]] = default
+    keys = effect_keys()
+    effects = build_effects(robot, rng=rng, **{k: v for k, v in cfg.items() if k in keys})
     loop = build_loop(robot.n, noise=cfg.get("noise"), quantization=cfg.get("quantization"), delay=cfg.get("delay"),
                       q0_error=cfg.get("q0_error"), qd0_error=cfg.get("qd0_error"),
                       seed=int(cfg.get("noise_seed", seed)))

@@ -1,38 +1,25 @@
-"""Compiled plant and loop effects, generic over n: the fields of :meth:`rc3r.plants.base.Plant.pack`
-and of :class:`rc3r.plants.loop.LoopEffects`, applied by every compiled engine.
+"""Compiled helpers of the plant and the loop, generic over n: the slot arithmetic of an effect's
+:class:`~rc3r.plants.base.Layout` (:func:`at`) and the loop's measurement of
+:class:`rc3r.plants.loop.LoopEffects` (:func:`measure`).
 
-``fx = [viscous (n), coulomb (n), offset (n), v_s, u_max (n)]``: with no effect (zeros and
-``inf``) :func:`apply_effects` returns ``u`` bit for bit, so a rigid plant's arithmetic is the
-one it always was.
+Each compiled effect's own kernels live in its module (:mod:`rc3r.plants.friction`,
+:mod:`rc3r.plants.saturation`, ...); the engines reach them through the dispatch generated from
+:data:`rc3r.plants.EFFECTS` (:mod:`rc3r.simulate.engines._effects`).
 """
 from __future__ import annotations
-
-import math
 
 import numpy as np
 from numba import njit
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
+#: Options of an effect's kernels: inlined into the generated dispatch (one copy, in it).
+KERNEL_JIT = dict(_JIT, inline="always")
 
 
-@njit(**_JIT)
-def actuate(fx, u, out):
-    """The delivered torque: ``u`` clipped to ``|u_j| <= u_max_j``."""
-    n = u.shape[0]
-    base = 3 * n + 1
-    for j in range(n):
-        lim = fx[base + j]
-        x = u[j]
-        out[j] = lim if x > lim else (-lim if x < -lim else x)
-
-
-@njit(**_JIT)
-def apply_effects(fx, qd, ua, tau):
-    """Joint torque ``tau = ua - (F_v qd + F_c tanh(qd / v_s) + offset)`` for the delivered torque ``ua``."""
-    n = ua.shape[0]
-    vs = fx[3 * n]
-    for j in range(n):
-        tau[j] = ua[j] - (fx[j] * qd[j] + fx[n + j] * math.tanh(qd[j] / vs) + fx[2 * n + j])
+@njit(**KERNEL_JIT)
+def at(slot, o, n):
+    """Index in ``fx`` of the field ``slot = (a, b)`` (:attr:`Layout.slots`) of the block at ``o``, n joints."""
+    return o + slot[0] * n + slot[1]
 
 
 @njit(**_JIT)
@@ -46,23 +33,3 @@ def measure(x, k, noise, quant, qm, qdm):
         qdm[j] = x[n + j] + (noise[k, n + j] if noisy else 0.0)
         if quant[j] > 0.0:
             qm[j] = quant[j] * np.rint(qm[j] / quant[j])
-
-
-@njit(**_JIT)
-def has_friction(fx, n):
-    """True if ``fx`` has a joint torque (viscous, Coulomb or offset friction) on some joint."""
-    for j in range(3 * n):
-        if fx[j] != 0.0:
-            return True
-    return False
-
-
-@njit(**dict(_JIT, inline="always"))
-def joint_torque(fx, fric, qd, ua, tau):
-    """``tau`` = the joint torque for the delivered ``ua``: :func:`~rc3r.plants._kernels.apply_effects`
-    if ``fric`` (:func:`has_friction`), else ``ua`` itself (what apply_effects returns then, ``ua - 0``, without its tanh calls)."""
-    if fric:
-        apply_effects(fx, qd, ua, tau)
-    else:
-        for j in range(ua.shape[0]):
-            tau[j] = ua[j]

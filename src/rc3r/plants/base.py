@@ -27,21 +27,40 @@ kinematics) and the measured state.
         def actuator(self, u, q, qd): ...         # (n,) the torque delivered for the command u
         def describe(self): ...                  # JSON-ready
 
-A Python effect runs in the ``python`` engine (``engine = "auto"`` picks it). The
-built-in effects (friction, saturation) are also **fields of the compiled engines'
-model** (:meth:`Plant.pack`, applied by :func:`rc3r.plants._kernels.apply_effects`),
-not code paths: an effect with ``compiled = True`` must say how it packs.
+A Python effect runs in the ``python`` engine (``engine = "auto"`` picks it). A
+**compiled** effect (``compiled = True``: friction, saturation, Stribeck friction) is one
+module that also holds, beside its class, what the compiled engines need
+(docs/architecture.md, "Adding a compiled plant effect"):
+
+* ``code`` (an int, unique) and ``role`` (``"torque"``: it adds ``tau_j(qd_j)`` at joint j;
+  ``"actuator"``: it maps the command ``u_j`` to the delivered torque);
+* ``LAYOUT``, a :class:`Layout` of its packed parameters named by its fields (:meth:`Plant.pack`
+  writes the block, the kernels read it by the layout's slots);
+* ``value_kernel(fx, o, n, j, x)``: njit, the torque at joint j (``x = qd_j``) or the delivered
+  torque (``x = u_j``) from the block at ``fx[o:]``;
+* ``slope_kernel(fx, o, n, j, x)``: njit, its derivative for the analytic Jacobian and the implicit
+  periods: ``-d tau_j / d qd_j`` (a torque) or ``d u_a,j / d u_j`` (an actuator).
+
+The compiled engines' dispatch over the registered codes is generated from :data:`EFFECTS`
+when an engine is instantiated (:mod:`rc3r.simulate.engines._effects`). Every effect also
+declares how a configuration reaches it: ``config_keys`` (the ``[plant]`` keys it reads, its
+``[plant.<name>]`` table first), :meth:`Effect.from_config`, and ``cli`` (its command-line
+:class:`Option`); ``stiff`` says whether it adds a state-dependent force (shorter explicit
+steps, :mod:`rc3r.simulate.steps`).
 
 Monitors (``monitor = True``, e.g. :class:`~rc3r.plants.limits.JointLimits`) do not act
 on the dynamics; they are read from the result (a verdict ``limit-violated``).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["Effect", "Plant", "EFFECTS", "register_effect", "as_plant", "per_joint"]
+__all__ = ["Effect", "Plant", "EFFECTS", "register_effect", "as_plant", "per_joint", "Layout", "Option",
+           "JOINT", "SCALAR", "nonnegative_numbers", "pair"]
 
 
 def per_joint(name, x, n, signed=False) -> np.ndarray:
@@ -58,6 +77,104 @@ def per_joint(name, x, n, signed=False) -> np.ndarray:
     return arr
 
 
+def pair(text, what: str):
+    """Two numbers from ``"A:B"`` or ``[A, B]``; ConfigError naming ``what``."""
+    if isinstance(text, str):
+        parts = text.split(":")
+        try:
+            vals = [float(x) for x in parts]
+        except ValueError:
+            raise ConfigError(f"{what} must be A:B (two numbers), got {text!r}") from None
+        if len(vals) != 2:
+            raise ConfigError(f"{what} must be A:B (two numbers), got {text!r}")
+        return vals
+    if isinstance(text, (list, tuple)) and len(text) == 2:
+        return list(text)
+    raise ConfigError(f"{what} must be A:B or [A, B], got {text!r}")
+
+
+def nonnegative_numbers(text: str, form: str, count: int = 2) -> str:
+    """``A:B[:...]`` (``count`` finite numbers >= 0) normalised to ``repr(A):repr(B)...``; ValueError naming
+    ``form`` (the command line's spelling) otherwise. The parse of an effect's :class:`Option`."""
+    try:
+        vals = [float(x) for x in text.split(":")]
+    except ValueError:
+        raise ValueError(f"expected {form}, got {text!r}") from None
+    if len(vals) != count:
+        raise ValueError(f"expected {form}, got {text!r}")
+    if not all(math.isfinite(v) and v >= 0 for v in vals):
+        raise ValueError(f"expected finite {form.split(' or ')[-1]} >= 0, got {text!r}")
+    return ":".join(repr(v) for v in vals)
+
+
+#: A :class:`Layout` field of n numbers (one per joint) and one of a single number.
+JOINT, SCALAR = "joint", "scalar"
+
+
+class Layout:
+    """Named offsets of a compiled effect's packed parameters, written once from its fields.
+
+    ``Layout(viscous=JOINT, v_s=SCALAR)``: the block is the fields in this order, a ``JOINT`` field n
+    numbers, a ``SCALAR`` one 1. Field ``k`` of the block starting at ``o`` starts at
+    ``o + a n + b`` with ``(a, b) = slots[k]`` (read in njit code by
+    :func:`rc3r.plants._kernels.at`).
+
+    Examples
+    --------
+    >>> L = Layout(viscous=JOINT, coulomb=JOINT, v_s=SCALAR, limit=JOINT)
+    >>> L.slots, L.size(3)
+    (((0, 0), (1, 0), (2, 0), (2, 1)), 10)
+    """
+
+    def __init__(self, **fields):
+        a = b = 0
+        slots = []
+        for name, kind in fields.items():
+            if kind not in (JOINT, SCALAR):
+                raise TypeError(f"Layout field {name!r} must be JOINT or SCALAR, got {kind!r}")
+            slots.append((a, b))
+            a, b = (a + 1, b) if kind == JOINT else (a, b + 1)
+        self.fields = tuple(fields.items())
+        #: ``(a, b)`` per field, in order: the field starts at ``o + a n + b``.
+        self.slots = tuple(slots)
+        self._ab = (a, b)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(k for k, _ in self.fields)
+
+    def size(self, n: int) -> int:
+        """Length of the block for n joints."""
+        return self._ab[0] * n + self._ab[1]
+
+    def pack(self, effect, n: int) -> np.ndarray:
+        """The block (:meth:`size`,) of ``effect``: its fields by name, a JOINT field broadcast to n."""
+        out = []
+        for name, kind in self.fields:
+            x = np.asarray(getattr(effect, name), dtype=float)
+            out.append(np.broadcast_to(x, (n,)) if kind == JOINT else np.reshape(x, (1,)))
+        return np.concatenate(out) if out else np.zeros(0)
+
+    def __repr__(self) -> str:
+        return "Layout(" + ", ".join(f"{k}={v.upper()}" for k, v in self.fields) + ")"
+
+
+class Option:
+    """An effect's command-line option: ``flag`` (``--friction``) sets the ``[plant]`` key ``key`` to
+    ``parse(text)`` (which raises ValueError with a one-line message on bad text); ``metavar``, ``help``
+    as argparse's. Read by :func:`rc3r.cli.plant_args` and :func:`rc3r.cli.run.plant_options`."""
+
+    def __init__(self, flag: str, key: str, parse, metavar: str, help: str):
+        self.flag, self.key, self.parse, self.metavar, self.help = flag, key, parse, metavar, help
+
+    @property
+    def dest(self) -> str:
+        return self.flag.lstrip("-").replace("-", "_")
+
+    def __repr__(self) -> str:
+        return f"Option({self.flag!r} -> [plant] {self.key})"
+
+
 class Effect:
     """Base of every plant effect (module docstring: what to implement).
 
@@ -69,11 +186,46 @@ class Effect:
         True if the compiled engines apply it from :meth:`Plant.pack`.
     monitor : bool
         True if it does not act on the dynamics (read from the result).
+    stiff : bool
+        True if it adds a state-dependent force to the rigid body (explicit steps get shorter:
+        :func:`rc3r.simulate.default_substeps`); False for actuator maps and monitors.
+    config_keys : tuple of str
+        The ``[plant]`` keys it is built from (:meth:`from_config`), ``name`` (its ``[plant.<name>]``
+        table) first where it has one; later ones are older spellings that keep working.
+    cli : tuple of Option
+        Its command-line options (each sets one of ``config_keys``).
+    code, role, LAYOUT, value_kernel, slope_kernel
+        A compiled effect's (module docstring); None otherwise.
     """
 
     name = "?"
     compiled = False
     monitor = False
+    stiff = True
+    config_keys: tuple = ()
+    cli: tuple = ()
+    code: int | None = None
+    role: str | None = None
+    LAYOUT: Layout | None = None
+    value_kernel = None
+    slope_kernel = None
+
+    @classmethod
+    def from_config(cls, robot, key: str, value, rng=None):
+        """The effect for ``robot`` from the ``[plant]`` key ``key`` (one of :attr:`config_keys`) holding
+        ``value`` (a string, numbers or a table), or None for none; ``rng`` draws uncertain ranges.
+        ConfigError on a bad value."""
+        raise ConfigError(f"plant effect {cls.name!r} cannot be configured")
+
+    @classmethod
+    def default_config(cls, robot):
+        """The value of :attr:`config_keys`' first key when a run gives none (None: the effect is off)."""
+        return None
+
+    def active(self) -> bool:
+        """False if the effect is compiled but leaves the dynamics as they are (zero friction): then
+        :meth:`Plant.pack` leaves it out, so the engine skips its arithmetic."""
+        return True
 
     def joint_torque(self, q, qd) -> np.ndarray | None:
         """Torque (n,) [N m] the effect adds at the joints, or None for none."""
@@ -101,8 +253,36 @@ def register_effect(cls: type[Effect]) -> type[Effect]:
     """Class decorator: make ``cls`` available by ``cls.name``."""
     if not (isinstance(cls, type) and issubclass(cls, Effect)) or cls.name in ("?", ""):
         raise TypeError("register_effect needs an Effect subclass with a name")
+    if cls.compiled:
+        _check_compiled(cls)
+    taken = {k: o.name for o in EFFECTS.values() if o.name != cls.name for k in o.config_keys}
+    clash = sorted(k for k in cls.config_keys if k in taken)
+    if clash:
+        raise TypeError(f"effect {cls.name!r}: [plant] key(s) {', '.join(clash)} already read by "
+                        f"{', '.join(sorted({taken[k] for k in clash}))}")
     EFFECTS[cls.name] = cls
     return cls
+
+
+def _check_compiled(cls) -> None:
+    """A compiled effect declares a unique positive code, a role, a LAYOUT of its own fields and both kernels."""
+    where = f"compiled effect {cls.name!r}"
+    if not isinstance(cls.code, int) or isinstance(cls.code, bool) or cls.code <= 0:
+        raise TypeError(f"{where} needs an int code > 0, got {cls.code!r}")
+    other = next((o.name for o in EFFECTS.values() if o.compiled and o.code == cls.code and o.name != cls.name), None)
+    if other:
+        raise TypeError(f"{where}: code {cls.code} is {other!r}'s")
+    if cls.role not in ("torque", "actuator"):
+        raise TypeError(f"{where}: role must be 'torque' or 'actuator', got {cls.role!r}")
+    if not isinstance(cls.LAYOUT, Layout):
+        raise TypeError(f"{where} needs a LAYOUT (rc3r.plants.base.Layout)")
+    fields = getattr(cls, "__dataclass_fields__", {})
+    bad = [k for k in cls.LAYOUT.names if k not in fields]
+    if bad:
+        raise TypeError(f"{where}: LAYOUT names {', '.join(bad)}, not fields of the class")
+    for kind in ("value_kernel", "slope_kernel"):
+        if getattr(getattr(cls, kind, None), "py_func", None) is None:
+            raise TypeError(f"{where}: {kind} must be a numba.njit function")
 
 
 class Plant:
@@ -203,20 +383,29 @@ class Plant:
         tau = self.delivered_joint_torque(q, qd, u) if delivered else self.joint_torque(q, qd, u)
         return self.rigid.forward_dynamics(q, qd, tau)
 
-    def pack(self) -> np.ndarray:
-        """The compiled engines' effect fields ``[viscous (n), coulomb (n), offset (n), v_s, u_max (n)]``.
+    def packed(self) -> tuple:
+        """The effects :meth:`pack` writes, in order: the compiled, :meth:`~Effect.active` non-monitors."""
+        return tuple(e for e in self.effects if e.compiled and not e.monitor and e.active())
 
-        Zero friction and an infinite torque limit when the effect is absent (so a rigid plant's
-        arithmetic is unchanged: ``min(max(u, -inf), inf) - 0 = u``).
+    def pack(self) -> np.ndarray:
+        """The compiled engines' effects ``fx``: ``[m, code_1, o_1, ..., code_m, o_m, block_1, ..., block_m]``.
+
+        ``m`` effects (:meth:`packed`), each by its registered ``code`` and the offset ``o`` of its block
+        (its ``LAYOUT``'s fields) in ``fx``. A rigid plant is ``[0]``: the engine's arithmetic is the
+        rigid body's alone. Applied by the dispatch generated from :data:`EFFECTS`
+        (:mod:`rc3r.simulate.engines._effects`): actuator maps in order, then the joint torques summed.
         """
         n = self.n
-        fx = np.zeros(4 * n + 1)
-        fx[3 * n] = 1.0
-        fx[3 * n + 1:] = np.inf
-        for e in self.effects:
-            if e.compiled:
-                e.pack_into(fx, n)
-        return fx
+        effects = self.packed()
+        head = np.zeros(1 + 2 * len(effects))
+        head[0] = len(effects)
+        blocks, o = [], head.size
+        for k, e in enumerate(effects):
+            block = e.LAYOUT.pack(e, n)
+            head[1 + 2 * k], head[2 + 2 * k] = e.code, o
+            blocks.append(block)
+            o += block.size
+        return np.concatenate([head] + blocks)
 
     def describe(self) -> dict:
         """JSON-ready: the rigid body (``Robot.describe``) and each effect."""

@@ -11,17 +11,26 @@ URDF's ``<dynamics damping="F_v" friction="F_c">`` (read by Pinocchio into
 ``model.damping`` and ``model.friction``). In a campaign each coefficient may be an
 uncertain range ``{lo = ..., hi = ...}``, drawn uniformly per joint and plant
 (:meth:`Friction.draw`).
+
+The module is the effect's one home: the class, its packed :data:`LAYOUT`, the compiled value
+(:func:`torque`) and derivative (:func:`damping`) the engines dispatch to by its ``code``, and how
+a configuration (``[plant] friction = ...``, ``[plant.friction]``) and the command line
+(``--friction``) reach it.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from ..errors import ConfigError
-from .base import Effect, per_joint, register_effect
+from ._kernels import KERNEL_JIT, at
+from .base import (JOINT, SCALAR, Effect, Layout, Option, nonnegative_numbers, pair, per_joint,
+                   register_effect)
 
-__all__ = ["Friction", "MAX_FRICTION"]
+__all__ = ["Friction", "MAX_FRICTION", "LAYOUT", "torque", "damping"]
 
 #: Largest friction coefficient of a plant: viscous [N m s/rad], Coulomb and offset [N m] (in magnitude).
 #: The largest industrial arms' joints deliver some 1e4 N m; 1e5 bounds what is physically plausible and
@@ -29,8 +38,38 @@ __all__ = ["Friction", "MAX_FRICTION"]
 MAX_FRICTION = 1e5
 
 
+#: The packed parameters (:meth:`rc3r.plants.Plant.pack`): the fields of :class:`Friction` by name.
+LAYOUT = Layout(viscous=JOINT, coulomb=JOINT, offset=JOINT, v_s=SCALAR)
+_FV, _FC, _OFF, _VS = LAYOUT.slots
+
+
+@njit(**KERNEL_JIT)
+def torque(fx, o, n, j, qd):
+    """Friction torque [N m] at joint j for its speed ``qd`` [rad/s]: ``-(F_v qd + F_c tanh(qd / v_s) + offset)``
+    from the block at ``fx[o:]`` (:data:`LAYOUT`)."""
+    vs = fx[at(_VS, o, n)]
+    return -(fx[at(_FV, o, n) + j] * qd + fx[at(_FC, o, n) + j] * math.tanh(qd / vs) + fx[at(_OFF, o, n) + j])
+
+
+@njit(**KERNEL_JIT)
+def damping(fx, o, n, j, qd):
+    """``-d torque / d qd`` [N m s/rad] at joint j: ``F_v + F_c (1 - tanh^2(qd / v_s)) / v_s`` (0 on a joint
+    without viscous and Coulomb friction)."""
+    fv, fc = fx[at(_FV, o, n) + j], fx[at(_FC, o, n) + j]
+    if fv != 0.0 or fc != 0.0:
+        vs = fx[at(_VS, o, n)]
+        th = math.tanh(qd / vs)
+        return fv + fc * (1.0 - th * th) / vs
+    return 0.0
+
+
 def _vector(name, x, n) -> np.ndarray:
     return per_joint(f"friction {name}", x, n)
+
+
+def _parse(text: str) -> str:
+    """``--friction``: ``urdf`` or ``VISCOUS:COULOMB`` (finite, >= 0)."""
+    return text if text == "urdf" else nonnegative_numbers(text, "'urdf' or VISCOUS:COULOMB")
 
 
 @register_effect
@@ -50,6 +89,14 @@ class Friction(Effect):
 
     name = "friction"
     compiled = True
+    code = 1
+    role = "torque"
+    LAYOUT = LAYOUT
+    value_kernel = staticmethod(torque)
+    slope_kernel = staticmethod(damping)
+    config_keys = ("friction",)
+    cli = (Option("--friction", "friction", _parse, "urdf|VISCOUS:COULOMB",
+                  "joint friction of the plant: the URDF's <dynamics damping friction> or values [N m s/rad]:[N m]"),)
 
     def __post_init__(self):
         fv = np.asarray(self.viscous, dtype=float)
@@ -86,9 +133,32 @@ class Friction(Effect):
         (``tanh``'s at ``qd = 0``)."""
         return self.viscous + self.coulomb / self.v_s
 
-    def pack_into(self, fx: np.ndarray, n: int) -> None:
-        """Fill the friction fields of :meth:`rc3r.plants.base.Plant.pack`."""
-        fx[0:n], fx[n:2 * n], fx[2 * n:3 * n], fx[3 * n] = self.viscous, self.coulomb, self.offset, self.v_s
+    def active(self) -> bool:
+        """False if every coefficient is zero (the compiled engines then skip it, as a rigid plant)."""
+        return bool(np.any(self.viscous) or np.any(self.coulomb) or np.any(self.offset))
+
+    @classmethod
+    def from_config(cls, robot, key, value, rng=None):
+        """``value``: None/false (none), ``"urdf"``, ``"VISCOUS:COULOMB"``, ``[viscous, coulomb]`` or a table
+        ``{"viscous": x, "coulomb": ..., "offset": ..., "v_s": ...}`` (``[plant.friction]``) where x is one
+        number, n numbers, or an uncertain range ``{lo = ..., hi = ...}`` drawn per joint with ``rng``
+        (a campaign's per-plant generator; seed 0 if None)."""
+        if value is None or value is False:
+            return None
+        n = robot.n
+        if value == "urdf":
+            return cls.from_model(robot)
+        if isinstance(value, dict):
+            unknown = sorted(set(value) - {"viscous", "coulomb", "offset", "v_s"})
+            if unknown:
+                raise ConfigError(f"[plant.friction]: unknown key(s) {', '.join(unknown)} "
+                                  "(valid: viscous, coulomb, offset, v_s)")
+            if any(isinstance(v, dict) for v in value.values()):
+                return cls.draw(value, n, np.random.default_rng(0) if rng is None else rng)
+            return cls(value.get("viscous", 0.0), value.get("coulomb", 0.0), value.get("offset", 0.0),
+                       v_s=float(value.get("v_s", 0.01)))
+        fv, fc = pair(value, "friction")
+        return cls(np.full(n, float(fv)), np.full(n, float(fc)))
 
     @classmethod
     def from_model(cls, robot, scale: float = 1.0) -> "Friction":

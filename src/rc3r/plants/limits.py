@@ -31,6 +31,30 @@ class JointLimits(Effect):
 
     name = "limits"
     monitor = True
+    stiff = False
+    config_keys = ("limits",)
+
+    @classmethod
+    def from_config(cls, robot, key, value, rng=None):
+        """``limits = "urdf"`` (the URDF's), false or None (none), or a table
+        ``{lower = [...], upper = [...], velocity = [...]}`` (``[plant.limits]``, [rad] and [rad/s])."""
+        if value is None or value is False:
+            return None
+        if isinstance(value, dict):
+            missing = sorted({"lower", "upper", "velocity"} - set(value))
+            extra = sorted(set(value) - {"lower", "upper", "velocity"})
+            if missing or extra:
+                raise ConfigError(f"[plant.limits] needs lower, upper, velocity (n numbers each), got "
+                                  f"{', '.join(sorted(value)) or 'nothing'}")
+            return cls(value["lower"], value["upper"], value["velocity"])
+        if value != "urdf":
+            raise ConfigError(f"plant limits must be 'urdf' or false, got {value!r}")
+        return cls.from_model(robot)
+
+    @classmethod
+    def default_config(cls, robot):
+        """``"urdf"`` for a robot read from a URDF (its limits are reported), else None."""
+        return "urdf" if getattr(robot, "urdf", None) else None
 
     def __post_init__(self):
         lo, hi, vel = (np.atleast_1d(np.asarray(x, dtype=float)) for x in (self.lower, self.upper, self.velocity))

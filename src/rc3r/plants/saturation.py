@@ -4,17 +4,55 @@ Limits come from a configuration or from the URDF's ``<limit effort="...">`` (Pi
 ``model.effortLimit``). A run records how often the command was at the limit
 (``saturation_fraction`` in its metrics; verdict ``saturated`` above
 :data:`rc3r.simulate.verdict.SATURATION_FRACTION`).
+
+The module is the effect's one home: the class, its packed :data:`LAYOUT`, the compiled clip
+(:func:`clip`) and its slope (:func:`passes`), and how a configuration (``[plant.saturation]
+limit = ...``, or the older ``[plant] torque_limit = ...``) and the command line
+(``--torque-limit``) reach it.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..errors import ConfigError
-from .base import Effect, register_effect
+from ._kernels import KERNEL_JIT, at
+from .base import JOINT, Effect, Layout, Option, register_effect
 
-__all__ = ["Saturation"]
+__all__ = ["Saturation", "LAYOUT", "clip", "passes"]
+
+#: The packed parameters (:meth:`rc3r.plants.Plant.pack`): the torque limit per joint.
+LAYOUT = Layout(limit=JOINT)
+_LIM, = LAYOUT.slots
+
+
+@njit(**KERNEL_JIT)
+def clip(fx, o, n, j, u):
+    """The delivered torque [N m] at joint j for the command ``u``: ``u`` clipped to ``|u| <= limit_j``."""
+    lim = fx[at(_LIM, o, n) + j]
+    return lim if u > lim else (-lim if u < -lim else u)
+
+
+@njit(**KERNEL_JIT)
+def passes(fx, o, n, j, u):
+    """``d clip / d u`` at joint j: 0 at or beyond the limit (the delivered torque does not move), else 1."""
+    return 0.0 if abs(u) >= fx[at(_LIM, o, n) + j] else 1.0
+
+
+def _parse(text: str):
+    """``--torque-limit``: ``urdf`` or one limit [N m] (finite, > 0) for every joint."""
+    if text == "urdf":
+        return text
+    try:
+        x = float(text)
+    except ValueError:
+        raise ValueError(f"expected 'urdf' or a number, got {text!r}") from None
+    if not (math.isfinite(x) and x > 0):
+        raise ValueError(f"must be finite and > 0, got {text}")
+    return x
 
 
 @register_effect
@@ -27,6 +65,15 @@ class Saturation(Effect):
 
     name = "saturation"
     compiled = True
+    stiff = False
+    code = 2
+    role = "actuator"
+    LAYOUT = LAYOUT
+    value_kernel = staticmethod(clip)
+    slope_kernel = staticmethod(passes)
+    config_keys = ("saturation", "torque_limit")
+    cli = (Option("--torque-limit", "torque_limit", _parse, "urdf|NM",
+                  "actuator saturation: the URDF's effort limits or one limit [N m] for every joint"),)
 
     def __post_init__(self):
         try:
@@ -44,9 +91,26 @@ class Saturation(Effect):
     def actuator(self, u, q, qd) -> np.ndarray:
         return np.clip(u, -self.limit, self.limit)
 
-    def pack_into(self, fx: np.ndarray, n: int) -> None:
-        """Fill the torque-limit fields of :meth:`rc3r.plants.base.Plant.pack`."""
-        fx[3 * n + 1:] = self.limit
+    @classmethod
+    def from_config(cls, robot, key, value, rng=None):
+        """``torque_limit = value`` or ``[plant.saturation] limit = value``: None/false (none), ``"urdf"``, a
+        number [N m] (every joint) or n numbers."""
+        if key == "saturation":
+            if not isinstance(value, dict) or set(value) - {"limit"} or "limit" not in value:
+                raise ConfigError(f"[plant.saturation] must be a table {{limit = NM | [n numbers] | \"urdf\"}}, "
+                                  f"got {value!r}")
+            value = value["limit"]
+        if value is None or value is False:
+            return None
+        if value == "urdf":
+            return cls.from_model(robot)
+        lim = np.asarray(value, dtype=float) if not isinstance(value, str) else None
+        if lim is None:
+            try:
+                lim = np.array(float(value))
+            except ValueError:
+                raise ConfigError(f"torque limit must be 'urdf' or N m, got {value!r}") from None
+        return cls(np.full(robot.n, float(lim)) if lim.ndim == 0 else lim)
 
     @classmethod
     def from_model(cls, robot) -> "Saturation":

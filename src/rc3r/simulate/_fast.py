@@ -124,9 +124,15 @@ def _write_once(path: Path, text: str) -> None:
 
 def instantiate(module: str):
     """The compiled integrators (:mod:`.engines.compiled`) instantiated on the kernel supply ``module``
-    (a dotted module name), imported once per process; ParameterError if it is no supply."""
-    if module in _INSTANCES:
-        return _INSTANCES[module]
+    (a dotted module name) and on the plant effects registered now (:data:`rc3r.plants.EFFECTS`, through
+    the dispatch :func:`.engines._effects.source` writes beside it), imported once per process and
+    registry; ParameterError if it is no supply."""
+    from ..plants import EFFECTS
+    from .engines import _effects
+
+    codes = tuple((c.code, c.name, c.value_kernel, c.slope_kernel) for c in _effects.compiled_effects(EFFECTS))
+    if (module, codes) in _INSTANCES:
+        return _INSTANCES[(module, codes)]
     if not isinstance(module, str) or not _DOTTED.match(module):
         raise ParameterError(f"kernel supply must be a dotted module name, got {module!r}")
     try:
@@ -142,16 +148,26 @@ def instantiate(module: str):
     source = template.replace(MARKER, MARKER.replace("rc3r.simulate.engines._template", module))
     if all(hasattr(supply, f) for f in _TANGENTS):
         source = source.replace(TANGENT_MARKER, TANGENT_MARKER.replace("rc3r.simulate.engines._template", module))
-    h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode() + source.encode())
-    supply_file = getattr(supply, "__file__", None)
-    if supply_file and not _numba_cache._inside(supply_file):  # outside the package: its own source counts
-        h.update(Path(supply_file).read_bytes())
+    if source.count(_effects.MARKER) != 1 or source.count("from rc3r.simulate.engines._effects import") != 1:
+        raise RuntimeError("rc3r.simulate.engines.compiled lost an effect-dispatch line")
+    dispatch = _effects.source(EFFECTS)
+    h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode() + source.encode() + b"\0"
+                       + dispatch.encode())
+    # every module the instantiated text imports counts: the supply and the effects' kernel modules (inside
+    # the package, package_hash covers those that use numba; outside, their own source)
+    for name_ in (module,) + _effects.kernel_modules(EFFECTS):
+        file_ = getattr(sys.modules.get(name_) or importlib.import_module(name_), "__file__", None)
+        if file_ and not _numba_cache._inside(file_):
+            h.update(Path(file_).read_bytes())
     key = h.hexdigest()[:16]
     stem = module.replace(".", "_")
+    effects_name = f"_rc3r_effects_{key}"
+    source = source.replace(_effects.MARKER, _effects.MARKER.replace("rc3r.simulate.engines._effects", effects_name))
     errors = []
     for root in _roots():
         path = root / key / f"{stem}.py"
         try:
+            _write_once(path.with_name(f"{effects_name}.py"), dispatch)
             _write_once(path, source)
             _prune(root, key)
             break
@@ -159,12 +175,19 @@ def instantiate(module: str):
             errors.append(f"{root}: {exc.strerror or exc}")
     else:
         raise ParameterError("cannot write the compiled engine's source: " + "; ".join(errors))
-    name = f"_rc3r_engine_{stem}_{key}"
+    if effects_name not in sys.modules:
+        _load(effects_name, path.with_name(f"{effects_name}.py"))
+    mod = _load(f"_rc3r_engine_{stem}_{key}", path)
+    _INSTANCES[(module, codes)] = mod
+    return mod
+
+
+def _load(name: str, path: Path):
+    """Import the file ``path`` as the module ``name`` (registered in ``sys.modules`` first)."""
     spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod
     spec.loader.exec_module(mod)
-    _INSTANCES[module] = mod
     return mod
 
 
@@ -276,6 +299,9 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     eng = simulator(rigid)
     n = plant.n
     fx = plant.pack()
+    stale = [e.name for e in plant.packed() if e.code not in eng.instance.EFFECT_CODES]
+    if stale:  # cannot happen through instantiate (keyed on the registry); a guard for a hand-made instance
+        raise ParameterError(f"the compiled engine has no branch for plant effect(s) {', '.join(stale)}")
     kc = eng.constants(rigid)  # once per run (packing the UR5's took 0.4 ms per chunk)
     cp, tp, code = law.pack(n), trajectory.pack(), int(law.code)
     lim = _limits(opt)

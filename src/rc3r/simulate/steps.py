@@ -27,8 +27,6 @@ EFFECT_SUBSTEP_S = 2.5e-4
 #: Largest ``h lambda`` of a default RK4 sub-step ``h`` against the effects' damping rate ``lambda``
 #: (:func:`stiffness`): RK4's factor on ``exp(-h lambda)`` at 1.0 is 0.375 against 0.368 (stable to 2.79).
 STIFF_STEP = 1.0
-#: Effects that leave the rigid body's forces as they are (they act on the held torque or only watch).
-_NON_STIFF = ("saturation", "limits")
 
 
 #: Largest joint angle [rad] a default RK4 sub-step may cover (``max |qd| * h``) before a sampled run is
@@ -96,7 +94,7 @@ def _resolve_steps(plant, options):
 def default_substeps(plant, rate: float, lam: float | None = None) -> int:
     """RK4 sub-steps per period of a sampled run on ``plant`` at ``rate`` [Hz] when ``SimOptions.nsub``
     is not given: steps of at most :data:`RIGID_SUBSTEP_S` for a rigid body (with saturation or limit
-    monitors), :data:`EFFECT_SUBSTEP_S` when another effect (friction) acts, and at most
+    monitors), :data:`EFFECT_SUBSTEP_S` when an effect that declares itself ``stiff`` (friction) acts, and at most
     :data:`STIFF_STEP` / :func:`stiffness` when the effects' damping is stiffer than that.
     :func:`simulate` redoes a run on the longer step with :data:`EFFECT_SUBSTEP_S` steps when it did
     not end ``ok`` or moved more than :data:`MAX_STEP_ANGLE` per step. ``lam``: :func:`stiffness` of
@@ -105,7 +103,9 @@ def default_substeps(plant, rate: float, lam: float | None = None) -> int:
 
     plant = as_plant(plant)
     effects = getattr(plant, "effects", ())
-    h = RIGID_SUBSTEP_S if all(getattr(e, "name", "?") in _NON_STIFF for e in effects) else EFFECT_SUBSTEP_S
+    # an effect declares whether it adds a state-dependent force (Effect.stiff: friction does; saturation acts
+    # on the held torque and limits only watch)
+    h = RIGID_SUBSTEP_S if not any(getattr(e, "stiff", True) for e in effects) else EFFECT_SUBSTEP_S
     lam = stiffness(plant) if lam is None else lam
     if lam > 0:
         h = min(h, STIFF_STEP / lam)

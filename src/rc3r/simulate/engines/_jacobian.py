@@ -17,7 +17,8 @@ signals ``(v, a, r, w)`` (slopes ``G``, ``W_x`` of :func:`rc3r.controllers._kern
 
 where ``D`` = d(Y theta_eff)/d(q, qd, v, a), ``X`` = d(Y^T r)/d(q, qd, v, a), ``Z_c`` the slopes of
 ``(q, qd, v, a)``, ``u_a`` the torque after the actuator's clip (slope 0 on a clipped joint) and
-``tau = u_a - friction(qd)``. The adaptive law adds the columns of z: ``U_z = Y``, ``dz/dt = -Gamma xi``.
+``tau = u_a + sum_k tau_k(qd)`` (the effects' slopes come from their own modules, :func:`finish`). The
+adaptive law adds the columns of z: ``U_z = Y``, ``dz/dt = -Gamma xi``.
 A law with a scheduled ``K_inertia`` is differentiated numerically (the caller falls back).
 ``tests/test_jacobian.py`` checks J and f_t against central differences of the right-hand side for
 every compiled law, with friction and a clipping torque limit.
@@ -39,13 +40,14 @@ _INLINE = dict(_JIT, inline="always")  # the helpers of compose: one copy, in it
 @njit(**_JIT)
 def work(n, p, nz):
     """Scratch of :func:`compose` and :func:`rc3r.simulate.engines.compiled._tangent_jacobian` for n joints,
-    p coefficients and nz controller states: ``(D, Dp, yt, G, Wx, Ux, Xi, jerk, TB, xs, om, Mw, piv, DA, bt)``;
-    ``TB`` (R, p) the directions b of :func:`xi_rows`, ``DA`` (R, n, 4n) the supply's tangents at them."""
+    p coefficients and nz controller states: ``(D, Dp, yt, G, Wx, Ux, Xi, jerk, TB, xs, om, Mw, piv, DA, bt, es)``;
+    ``TB`` (R, p) the directions b of :func:`xi_rows`, ``DA`` (R, n, 4n) the supply's tangents at them, ``es``
+    (2, n) the plant effects' slopes (``effect_slopes`` of the engine's effect dispatch)."""
     m = 2 * n + 1
     R = max(n, nz) + 1
     return (np.empty((n, 4 * n)), np.empty((n, 4 * n)), np.empty(n), np.empty((3, n, 3)), np.empty((n, m)),
             np.empty((n, m + nz)), np.empty((R, m)), np.empty(n), np.empty((R, p)), np.empty(p), np.empty(p),
-            np.empty((n, n)), np.zeros(n, dtype=np.int64), np.empty((R, n, 4 * n)), np.empty(1))
+            np.empty((n, n)), np.zeros(n, dtype=np.int64), np.empty((R, n, 4 * n)), np.empty(1), np.empty((2, n)))
 
 
 @njit(**_INLINE)
@@ -64,25 +66,23 @@ def through_signals(D, G, out):
 
 
 @njit(**_INLINE)
-def finish(fx, u, x, Dp, Ux, Xi, gam, J, Ft, Mw, piv):
-    """From ``Ux`` (n, 2n + 1 + nz) = du/d(q, qd, t, z) of the law's torque ``u``: through the actuator's
-    clip and the friction of ``fx`` (:mod:`rc3r.plants._kernels`), then the plant (``Dp`` of
-    ``plant_tangents_into`` at the state's qdd), fill ``J`` (N, N) and ``Ft`` (N,). ``gam`` (nz,): the
-    adaptive law's Gamma (``dz/dt = -Gamma xi``, rows of ``Xi`` = d xi/d(q, qd, t)); empty otherwise.
-    ``Mw`` (n, n), ``piv`` (n,): scratch. False if M(q) is singular."""
-    n = u.shape[0]
+def finish(es, x, Dp, Ux, Xi, gam, J, Ft, Mw, piv):
+    """From ``Ux`` (n, 2n + 1 + nz) = du/d(q, qd, t, z) of the law's torque ``u``: through the plant effects'
+    slopes ``es`` (2, n) (row 0 ``d u_a / d u`` of the actuators, 0 on a clipped joint; row 1 the joint
+    torques' damping ``-d tau / d qd``; each effect's ``slope_kernel``, gathered by the engine's effect
+    dispatch), then the plant (``Dp`` of ``plant_tangents_into`` at the state's qdd), fill ``J`` (N, N) and
+    ``Ft`` (N,). ``gam`` (nz,): the adaptive law's Gamma (``dz/dt = -Gamma xi``, rows of ``Xi`` = d xi/d(q, qd,
+    t)); empty otherwise. ``Mw`` (n, n), ``piv`` (n,): scratch. False if M(q) is singular."""
+    n = es.shape[1]
     N = x.shape[0]
     nz = N - 2 * n
     m = 2 * n + 1
-    vs = fx[3 * n]
     for i in range(n):
-        lim = fx[3 * n + 1 + i]
-        if abs(u[i]) >= lim:  # clipped (u: the law's torque or the delivered one): the delivered torque does not move
+        g = es[0, i]
+        if g != 1.0:  # clipped (slope 0): the delivered torque does not move
             for c in range(m + nz):
-                Ux[i, c] = 0.0
-        if fx[i] != 0.0 or fx[n + i] != 0.0:  # tau = u_a - (F_v qd + F_c tanh(qd / v_s) + offset)
-            th = math.tanh(x[n + i] / vs)
-            Ux[i, n + i] -= fx[i] + fx[n + i] * (1.0 - th * th) / vs
+                Ux[i, c] = 0.0 if g == 0.0 else Ux[i, c] * g
+        Ux[i, n + i] -= es[1, i]  # tau = u_a + sum_k tau_k(qd)
         for j in range(n):
             Ux[i, j] -= Dp[i, j]
             Ux[i, n + j] -= Dp[i, n + j] + Dp[i, 2 * n + j]
@@ -193,11 +193,11 @@ def xi_rows(law, cp, Y, r, tw):
 
 
 @njit(**_JIT)
-def compose(law, cp, fx, x, u, Y, r, rows, tw, J, Ft):
-    """``J`` (N, N), ``Ft`` (N,) of the closed loop at x (module docstring) from the law's torque ``u`` (before
-    the actuator), the formed ``Y``, ``r``, and in ``tw`` the supply's tangents ``D`` (at theta_eff), ``Dp``
-    (the plant's), ``DA[:rows]`` (at the directions of :func:`xi_rows`) and the law's slopes ``G``, ``Wx``.
-    False if M(q) is singular."""
+def compose(law, cp, es, x, u, Y, r, rows, tw, J, Ft):
+    """``J`` (N, N), ``Ft`` (N,) of the closed loop at x (module docstring) from the law's torque ``u``, the
+    formed ``Y``, ``r``, the plant effects' slopes ``es`` (:func:`finish`), and in ``tw`` the supply's tangents
+    ``D`` (at theta_eff), ``Dp`` (the plant's), ``DA[:rows]`` (at the directions of :func:`xi_rows`) and the
+    law's slopes ``G``, ``Wx``. False if M(q) is singular."""
     D, Dp, yt, G, Wx, Ux, Xi, TB, xs, DA, bt = tw[0], tw[1], tw[2], tw[3], tw[4], tw[5], tw[6], tw[8], tw[9], \
         tw[13], tw[14]
     n, p = Y.shape
@@ -225,4 +225,4 @@ def compose(law, cp, fx, x, u, Y, r, rows, tw, J, Ft):
         for k in range(nz):
             Ux[i, m + k] = Y[i, k]
     s = 1 + p + 2 * n
-    return finish(fx, u, x, Dp, Ux, Xi, cp[s:s + nz], J, Ft, tw[11], tw[12])
+    return finish(es, x, Dp, Ux, Xi, cp[s:s + nz], J, Ft, tw[11], tw[12])

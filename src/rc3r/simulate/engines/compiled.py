@@ -14,9 +14,10 @@ r"""The compiled engine's integrators, written once for any n and p (numba): a t
   steps (:func:`_rodas_period`) or ROS4 steps (:func:`_stiff_period`) on the plant alone; the controller
   state by forward Euler.
 
-Effects (``fx`` of :meth:`rc3r.plants.Plant.pack`, the loop's noise, quantization, delay) are applied by
-:mod:`rc3r.plants._kernels`; the law by :mod:`rc3r.controllers._kernels` (its integer code). The robot
-enters only through its **kernel supply** (:mod:`._template`) on its constants ``kc``. n is
+Effects (``fx`` of :meth:`rc3r.plants.Plant.pack`) are applied by the dispatch generated from
+:data:`rc3r.plants.EFFECTS` (:mod:`._effects`, the line marked ``# effect dispatch``; each effect's kernels
+live in its module), the loop's noise and quantization by :mod:`rc3r.plants._kernels`; the law by
+:mod:`rc3r.controllers._kernels` (its integer code). The robot enters only through its **kernel supply** (:mod:`._template`) on its constants ``kc``. n is
 ``U.shape[1]``, p is ``cp[0]``. Never run as it stands: :func:`rc3r.simulate._fast.instantiate` writes a
 copy per supply with the lines marked ``# kernel supply`` naming the supply's module (numba caches a
 module on disk, not a function that receives another jitted function), so every import here is
@@ -30,7 +31,8 @@ import numpy as np
 from numba import njit
 
 from rc3r.controllers._kernels import inertia_gain, law_signals, law_slopes, law_theta, uses_xi
-from rc3r.plants._kernels import actuate, has_friction as _friction, joint_torque as _joint_torque, measure
+from rc3r.plants._kernels import measure
+from rc3r.simulate.engines._effects import CODES as EFFECT_CODES, actuate, damping as _damping, effect_slopes as _effect_slopes, has_torque as _friction, joint_torque as _joint_torque  # noqa: F401 - effect dispatch
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, tangents_into as _tangents  # kernel supply (optional)
 from rc3r.simulate.engines._jacobian import compose, work as _tangent_work, xi_rows
@@ -142,7 +144,8 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     rows = xi_rows(law, cp, Y, r, tw)  # the directions b whose r^T d(Y b)/dz the law needs (tw[8])
     for i in range(rows):
         _tangents(kc, tw[8][i], q, qd, v, a, tw[13][i], wk)
-    return compose(law, cp, fx, x, u, Y, r, rows, tw, J, Ft)
+    _effect_slopes(fx, u, qd, tw[15])  # the plant effects' slopes at the delivered u and qd
+    return compose(law, cp, tw[15], x, u, Y, r, rows, tw, J, Ft)
 
 
 #: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
@@ -454,13 +457,12 @@ _NEWTON_MAX = 10
 @njit(**dict(_JIT, inline="always"))
 def _newton_matrix(fx, qd, hg, Mi, N, piv):
     """``N = I + hg M0^-1 diag(phi'(qd))`` (n, n), LU-factored in place: the friction block of the SDIRK
-    stage's Newton matrix (``phi`` the friction torque of ``fx``, ``phi' = F_v + F_c / v_s sech^2(qd / v_s)``,
-    ``Mi`` = M^-1 at the step's start). False if singular."""
+    stage's Newton matrix (``phi'`` the effects' damping ``-d tau / d qd`` at ``qd``, each effect's
+    ``slope_kernel``: friction's ``F_v + F_c / v_s sech^2(qd / v_s)``; ``Mi`` = M^-1 at the step's start).
+    False if singular."""
     n = qd.shape[0]
-    vs = fx[3 * n]
     for j in range(n):
-        th = math.tanh(qd[j] / vs)
-        d = hg * (fx[j] + fx[n + j] * (1.0 - th * th) / vs)
+        d = hg * _damping(fx, n, j, qd[j])
         for i in range(n):
             N[i, j] = Mi[i, j] * d + (1.0 if i == j else 0.0)
     return _lu_factor(N, piv)
