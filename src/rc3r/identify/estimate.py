@@ -38,6 +38,13 @@ Noise and covariance
     residual: ``||r_j||^2 = sigma_j^2 (N G - m/(n D))`` with ``G`` the filter's noise gain
     (:func:`rc3r.identify.filtering.noise_gain`) and ``D`` the coarse grid's step.
 
+In-band covariance (:func:`in_band_covariance`, ``rc3r identify``'s default)
+    The same sandwich with ``s_j = c_j |L|^2``: one level per joint, measured over the band that holds
+    :data:`INFO_SHARE` of the estimate's information, by moments that count what the fit absorbed
+    there. The filtered residual's spectrum rises toward ``f_c`` (errors in the variables), the
+    regressor's information lies well below it: the whole band's level (above) overstates the noise
+    that moves the estimate (docs/identification.md, section 2.5).
+
 Confidence ellipsoid (:func:`ellipsoid`)
     ``x`` is approximately normal, so the dynamic coefficients ``theta`` (the first ``p``
     unknowns) satisfy ``(theta - theta_hat)^T Cov_theta^{-1} (theta - theta_hat) <= chi2_p(C)``

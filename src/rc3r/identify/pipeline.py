@@ -138,7 +138,9 @@ class Identification:
             "covariance": self.cov.tolist(),
             "noise": {"sigma": self.sigma.tolist(), "sigma_raw": self.sigma_raw.tolist(),
                       "meaning": "sigma: white torque noise per logged sample [N m] estimated from the filtered "
-                                 "residuals (sets the covariance); sigma_raw: RMS of the unfiltered training "
+                                 "residuals over the pass band (sets the white covariance and the consistent fit's "
+                                 "metric; the default in-band covariance uses regressor.covariance.in_band_sigma); "
+                                 "sigma_raw: RMS of the unfiltered training "
                                  "residual (sets the prediction band)"},
             "ellipsoid": ell,
             "filter": self.filter,
@@ -343,8 +345,9 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         from .physical import RULE_STAMPS
 
         rule = tr_idx[np.unique(np.linspace(0, tr_idx.size - 1, min(tr_idx.size, RULE_STAMPS)).astype(int))]
-        phys, pfit = _physical(robot, fit, parts["white"], kinds, _raw_rows(robot, prep, log.t[rule], kinds, True, v_s), log.tau[rule],
-                               A[test], prep.tau[test], R_te, tau_te, confidence, max(nu, 1.5), sigma_raw, seed)
+        phys, pfit = _physical(robot, fit, parts["white"], kinds, _raw_rows(robot, prep, log.t[rule], kinds, True, v_s),
+                               log.tau[rule], A[test], prep.tau[test], R_te, tau_te, confidence, max(nu, 1.5),
+                               sigma_raw, seed)
     return Identification(robot.describe() | {"coefficient_names": list(robot.coefficient_names)},
                           tuple(robot.coefficient_names), kinds, fit.x, fit.cov, p, fit.sigma, sigma_raw, ell,
                           filt, validation, reg, log.describe(), cons, held, sel, law, phys, pfit)
