@@ -89,10 +89,10 @@ def test_ur5_is_identified_and_physically_consistent():
     arm is consistent).
 
     At the settings the spectra chose before issue 35 (their cut-off, differentiated velocities, per-joint
-    weights, sign friction: where the covariance model is calibrated, tests/test_identify_coverage.py).
-    With the cross-validated defaults (3 Hz, v_s = 0.003 rad/s) this one log puts the true theta just
-    outside the ellipsoid: d^T Cov^-1 d = 57.8 against the quantile 53.2 (2026-12-06; 58.3 against 55.2
-    at 2 Hz with sign friction)."""
+    weights, sign friction; d^T Cov^-1 d = 52.3 against the quantile 52.9 with the in-band covariance).
+    With the cross-validated defaults (3 Hz, v_s = 0.003 rad/s) the true theta is inside too with the
+    in-band covariance (50.9 against 54.5; the white one put it just outside, 57.8 against 53.2; 2026-12-06),
+    but the consistent fit's 0.19 kg wrist comes out 37 % heavy there, beyond this test's 25 %."""
     from rc3r.identify import filtering as F
 
     ur5 = rc3r.load_robot("ur5")

@@ -128,20 +128,31 @@ def test_malformed_physical_table_is_refused(tmp_path, pendulum, pendulum_result
 
 @pytest.mark.slow
 def test_true_theta_is_inside_the_physical_ellipsoid_at_about_the_stated_confidence(pendulum, pendulum_motion):
-    """100 seeded logs (seeds 0-99, new noise and stamps each): the true theta lies in the bounds'
+    """100 seeded logs (seeds 0-99, new noise and stamps each), defaults: the true theta lies in the bounds'
     ellipsoid (about the consistent estimate) in at least 88 % of them (95 % stated; a prior equal to the
-    truth pulls the centre toward it, so coverage may exceed 95 %), and every fit is physical."""
-    inside = []
+    truth pulls the centre toward it, so coverage may exceed 95 %: 99 % measured, mean
+    ``d^T Cov^-1 d / p`` 0.36), and every fit is physical. The same covariance about the unconstrained
+    estimate, which no prior pulls, is calibrated on this second arm too: coverage within [0.88, 0.99]
+    (95 +- 2.2 % binomial standard deviation: -3.2 and +1.8 sigma) and the mean within [0.7, 1.3]
+    (measured 2026-12-06: 94 %, 0.997; the white covariance 94 %, 0.981: this arm's residual is flat)."""
+    inside, inside_u, m2_u = [], [], []
     for seed in range(100):
         log, truth = sample_log(pendulum_motion, seed=seed)
         res = identify(pendulum, log, consistency=False, seed=seed)
         b = res.bounds()
         d = b["theta0"] - truth["theta"]
         inside.append(d @ b["P"] @ d <= 1.0)
+        du = res.theta - truth["theta"]
+        m = float(du @ np.linalg.solve(res.cov_theta, du))
+        inside_u.append(m <= res.ellipsoid["chi2"])
+        m2_u.append(m / du.size)
         assert np.all(_pin_min_eigenvalues(res.physical_fit.standard) > 0)
     coverage = float(np.mean(inside))
-    print(f"\ncoverage of the 95 % physical ellipsoid over 100 logs: {100 * coverage:.1f} %")
+    print(f"\ncoverage of the 95 % physical ellipsoid over 100 logs: {100 * coverage:.1f} %; unconstrained "
+          f"{100 * np.mean(inside_u):.1f} %, mean d^T Cov^-1 d / p {np.mean(m2_u):.3f}")
     assert coverage >= 0.88
+    assert 0.88 <= np.mean(inside_u) <= 0.99
+    assert 0.7 <= np.mean(m2_u) <= 1.3
 
 
 @pytest.mark.slow

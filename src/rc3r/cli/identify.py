@@ -62,9 +62,10 @@ def add_parsers(sub, positive, lock, urdf=str) -> None:
                    help="last fraction of the log held out for validation (default 0.2)")
     i.add_argument("--confidence", type=_fraction, default=0.95, metavar="C",
                    help="confidence level of the ellipsoid and the prediction band (default 0.95)")
-    i.add_argument("--covariance", choices=("white", "robust"), default="white",
-                   help="white (default): from the in-band residual level; robust: also dominate the "
-                        "spectral (Whittle) covariance, for coloured low-frequency residuals")
+    i.add_argument("--covariance", choices=("in-band", "white", "robust"), default="in-band",
+                   help="in-band (default): the noise level measured where the estimate's information lies "
+                        "(corrected for what the fit absorbed); white: the whole pass band's level; robust: "
+                        "white, also dominating the spectral (Whittle) covariance")
     i.add_argument("--velocities", choices=("auto", "logged", "differentiated"), default="auto",
                    help="logged qd or differentiated q (default auto: chosen by cross-validation when qd is logged)")
     i.add_argument("--weighting", choices=("auto", "ordinary", "per-joint"), default="auto",

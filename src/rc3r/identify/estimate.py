@@ -38,6 +38,13 @@ Noise and covariance
     residual: ``||r_j||^2 = sigma_j^2 (N G - m/(n D))`` with ``G`` the filter's noise gain
     (:func:`rc3r.identify.filtering.noise_gain`) and ``D`` the coarse grid's step.
 
+In-band covariance (:func:`in_band_covariance`, ``rc3r identify``'s default)
+    The same sandwich with ``s_j = c_j |L|^2``: one level per joint, measured over the band that holds
+    :data:`INFO_SHARE` of the estimate's information, by moments that count what the fit absorbed
+    there. The filtered residual's spectrum rises toward ``f_c`` (errors in the variables), the
+    regressor's information lies well below it: the whole band's level (above) overstates the noise
+    that moves the estimate (docs/identification.md, section 2.5).
+
 Confidence ellipsoid (:func:`ellipsoid`)
     ``x`` is approximately normal, so the dynamic coefficients ``theta`` (the first ``p``
     unknowns) satisfy ``(theta - theta_hat)^T Cov_theta^{-1} (theta - theta_hat) <= chi2_p(C)``
@@ -60,7 +67,7 @@ import numpy as np
 from ..errors import ConfigError, ParameterError
 
 __all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit", "ellipsoid_factor", "draw_theta",
-           "check_excitation", "weighted_least_squares", "spectral_covariance",
+           "check_excitation", "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
            "dominating", "ellipsoid"]
 
 #: Largest condition number of the column-scaled regressor that still counts as full rank.
@@ -68,6 +75,10 @@ COND_MAX = 1e6
 
 #: The least-squares weightings (:func:`weighted_least_squares`).
 WEIGHTINGS = ("ordinary", "per-joint")
+
+#: The in-band covariance measures the noise level over the band holding this share of the estimate's
+#: information (:func:`in_band_covariance`).
+INFO_SHARE = 0.99
 
 #: A joint whose filtered position range is below this [rad or m] does not move.
 MOTION_MIN = 1e-2
@@ -245,6 +256,71 @@ def spectral_covariance(A, w, rate: float, density) -> np.ndarray:
     Hinv = np.linalg.inv(H)
     cov = Hinv @ B @ Hinv / np.outer(scale, scale)
     return 0.5 * (cov + cov.T)
+
+
+def in_band_covariance(A, w, e, rate: float, fs: float, fc: float, share: float = INFO_SHARE) -> dict:
+    r"""The sandwich covariance with each joint's noise level measured where the estimate's information is.
+
+    The filtered residual's spectrum is not flat inside the pass band: errors in the variables
+    (differentiated encoder steps in ``qdd``, Coulomb columns flipping with velocity noise) grow toward
+    ``f_c``, while the regressor's rows ``Z`` (weights ``w`` (n,), rows ``A`` (N, n, m) at ``rate`` [Hz],
+    residual ``e`` (N, n)) hold their energy well below it. A flat level averaged over the whole band
+    (:func:`weighted_least_squares`) then overstates the noise that moves the estimate. Here:
+
+    * the band ``[0, f_top]`` holds ``share`` of the estimate's information
+      ``I(f) = |L(f)|^2 sum_j tr(H^{-1} \hat Z_j(f)^* \hat Z_j(f))``;
+    * each joint's level ``c_j`` (white-equivalent, filtered like the rows: density ``c_j |L|^2``) is the
+      method-of-moments solution of ``E[Q_j] = Q_j``, ``Q_j`` the residual's power in the band, whose
+      expectation under the model ``E[r r^T] = (I - Z H^{-1} Z^T) S (I - Z H^{-1} Z^T)`` counts what the fit
+      absorbed there (in the band the fit absorbs a large share of the residual: the uncorrected level
+      is too small);
+    * ``Cov = H^{-1} (sum_j c_j G_j) H^{-1}`` with ``G_j`` the Whittle form of :func:`spectral_covariance`.
+
+    Returns ``cov`` (m, m), ``sigma`` (n,) (white-equivalent per-sample level at ``fs`` [unit]),
+    ``band_hz`` (``f_top``) and ``dof`` (``2 f_top T`` per joint minus the information absorbed: the
+    F quantile's ``nu``).
+    """
+    from .filtering import power_response
+
+    A = np.asarray(A, dtype=float)
+    N, n, m = A.shape
+    w = np.asarray(w, dtype=float)
+    Z = A * w[None, :, None]
+    r = np.asarray(e, dtype=float) * w[None, :]
+    scale = np.linalg.norm(Z.reshape(-1, m), axis=0)
+    scale[scale == 0] = 1.0
+    Z = Z / scale
+    Hi = np.linalg.inv(np.einsum("tjk,tjl->kl", Z, Z))
+    M = 2 * N
+    f = np.fft.rfftfreq(M, d=1.0 / rate)
+    wt = np.full(f.size, 2.0)
+    wt[0] = 1.0
+    if M % 2 == 0:
+        wt[-1] = 1.0
+    L2 = power_response(f, fs, fc) * (rate / 2.0)  # per-row variance density of filtered noise of level 1
+    F = [np.fft.rfft(Z[:, j, :], n=M, axis=0) for j in range(n)]
+    R = np.abs(np.fft.rfft(r, n=M, axis=0)) ** 2
+
+    def gram(j, g):
+        return np.real(F[j].conj().T @ (F[j] * (wt * g)[:, None])) / M
+
+    info = L2 * wt * sum(np.einsum("kl,fk,fl->f", Hi, F[j].conj(), F[j]).real for j in range(n))
+    top = float(f[min(int(np.searchsorted(np.cumsum(info) / info.sum(), share)), f.size - 1)])
+    b = f <= top
+    G = [gram(j, L2) for j in range(n)]
+    X, q, absorbed = np.zeros((n, n)), np.zeros(n), 0.0
+    for j in range(n):
+        Gb = gram(j, b.astype(float))
+        X[j, j] += (N / M) * np.sum(wt[b] * L2[b]) - 2.0 * np.trace(Hi @ gram(j, b * L2))
+        HGH = Hi @ Gb @ Hi
+        X[j] += [np.sum(HGH * G[i]) for i in range(n)]
+        q[j] = np.sum(wt[b] * R[b, j]) / M
+        absorbed += float(np.trace(Hi @ Gb))
+    c = np.linalg.solve(X, q)
+    c = np.maximum(c, 1e-24 * max(1.0, float(np.max(np.abs(c)))))
+    cov = Hi @ sum(c[i] * G[i] for i in range(n)) @ Hi / np.outer(scale, scale)
+    return {"cov": 0.5 * (cov + cov.T), "sigma": np.sqrt(c * fs / 2.0) / w, "band_hz": top,
+            "dof": n * 2.0 * top * N / rate - absorbed}
 
 
 def dominating(C1, C2) -> np.ndarray:

@@ -42,7 +42,10 @@ from . import filtering as _flt
 from . import selection as _sel
 from .regressors import COULOMB_LAW, FRICTION_KINDS, friction_names
 
-__all__ = ["Identification", "identify", "MAX_RAW_STAMPS"]
+__all__ = ["Identification", "identify", "MAX_RAW_STAMPS", "COVARIANCES"]
+
+#: The covariance models of :func:`identify` (the first is the default).
+COVARIANCES = ("in-band", "white", "robust")
 
 #: At most this many training time stamps (evenly spread) estimate the raw residual's noise.
 MAX_RAW_STAMPS = 20000
@@ -135,7 +138,9 @@ class Identification:
             "covariance": self.cov.tolist(),
             "noise": {"sigma": self.sigma.tolist(), "sigma_raw": self.sigma_raw.tolist(),
                       "meaning": "sigma: white torque noise per logged sample [N m] estimated from the filtered "
-                                 "residuals (sets the covariance); sigma_raw: RMS of the unfiltered training "
+                                 "residuals over the pass band (sets the white covariance and the consistent fit's "
+                                 "metric; the default in-band covariance uses regressor.covariance.in_band_sigma); "
+                                 "sigma_raw: RMS of the unfiltered training "
                                  "residual (sets the prediction band)"},
             "ellipsoid": ell,
             "filter": self.filter,
@@ -166,7 +171,7 @@ def _filtered_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
 
 def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: float | None = None,
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
-             consistency: bool = True, covariance: str = "white", seed: int = 0, weighting: str = "auto",
+             consistency: bool = True, covariance: str = "in-band", seed: int = 0, weighting: str = "auto",
              coulomb_velocity: float | None = None, folds: int = _sel.FOLDS,
              physical: bool = True) -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
@@ -192,7 +197,10 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     consistency : bool
         Run the physical-consistency SDP (needs cvxpy).
     covariance : str
-        ``"white"``: from the in-band residual level (:func:`~rc3r.identify.estimate.weighted_least_squares`);
+        ``"in-band"`` (default): the sandwich with each joint's noise level measured, corrected for what
+        the fit absorbed, over the band that holds the estimate's information
+        (:func:`~rc3r.identify.estimate.in_band_covariance`; F quantile with that band's degrees of freedom);
+        ``"white"``: from the whole pass band's residual level (:func:`~rc3r.identify.estimate.weighted_least_squares`);
         ``"robust"``: the smallest covariance that dominates it and the spectral (Whittle) one
         (:func:`~rc3r.identify.estimate.dominating`), for logs with coloured low-frequency residuals.
     seed : int
@@ -215,8 +223,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         raise ConfigError(f"test fraction must be between 0 and 1 (exclusive), got {test_fraction}")
     if not 0.0 < confidence < 1.0:
         raise ConfigError(f"confidence must be between 0 and 1 (exclusive), got {confidence}")
-    if covariance not in ("white", "robust"):
-        raise ConfigError(f"covariance must be 'white' or 'robust', got {covariance!r}")
+    if covariance not in COVARIANCES:
+        raise ConfigError(f"covariance must be one of {', '.join(COVARIANCES)}, got {covariance!r}")
     if weighting != "auto" and weighting not in _est.WEIGHTINGS:
         raise ConfigError(f"weighting must be auto, {', '.join(_est.WEIGHTINGS)}, got {weighting!r}")
     if velocities not in ("auto", "logged", "differentiated"):
@@ -274,10 +282,15 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
                                 ** 2, axis=0))
     density = _flt.residual_density(log.t[tr_idx], raw_res, fc, prep.fs)
     parts = {"white": fit.cov, "spectral": _est.spectral_covariance(A[train], fit.weights, prep.fs_coarse, density)}
+    inband = _est.in_band_covariance(A[train], fit.weights, prep.tau[train] - A[train] @ fit.x, prep.fs_coarse,
+                                     prep.fs, fc)
+    parts["in-band"] = inband["cov"]
+    nu = robot.n * _flt.effective_dof(int(fit.rows), prep.fs_coarse, fc) - len(names)
     if covariance == "robust":
         fit = replace(fit, cov=_est.dominating(parts["white"], parts["spectral"]))
+    elif covariance == "in-band":
+        fit, nu = replace(fit, cov=inband["cov"]), inband["dof"]
     p = robot.p
-    nu = robot.n * _flt.effective_dof(int(fit.rows), prep.fs_coarse, fc) - len(names)
     ell = _est.ellipsoid(fit.cov[:p, :p], confidence, dof=max(nu, 1.5))
     te_idx = np.nonzero(ok & (log.t > t_split))[0]
     if te_idx.size == 0:
@@ -311,10 +324,16 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
            "chosen": "cross-validation" if len(v_cands) > 1 else
            ("given (--coulomb-velocity)" if coulomb_velocity is not None else "no Coulomb term")}
     lam = np.linalg.eigvals(np.linalg.solve(parts["white"], parts["spectral"])).real
+    lam_ib = np.linalg.eigvals(np.linalg.solve(parts["white"], parts["in-band"])).real
     reg = {"rows": int(fit.rows), "unknowns": len(names), "condition_number": fit.cond,
            "covariance": {"method": covariance, "spectral_over_white": [float(lam.min()), float(lam.max())],
-                          "meaning": "range of the generalized eigenvalues of the spectral (Whittle) covariance "
-                                     "against the white one"}}
+                          "in_band_over_white": [float(lam_ib.min()), float(lam_ib.max())],
+                          "in_band_hz": inband["band_hz"], "information_share": _est.INFO_SHARE,
+                          "in_band_sigma": inband["sigma"].tolist(), "in_band_dof": float(inband["dof"]),
+                          "meaning": "spectral_over_white, in_band_over_white: ranges of the generalized eigenvalues "
+                                     "of the spectral (Whittle) and the in-band covariance against the white one; "
+                                     "in_band_hz: the band holding information_share of the estimate's information, "
+                                     "where in_band_sigma (white-equivalent noise per logged sample) is measured"}}
     cons = None
     if consistency:
         from .consistency import check_consistency
@@ -326,14 +345,15 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         from .physical import RULE_STAMPS
 
         rule = tr_idx[np.unique(np.linspace(0, tr_idx.size - 1, min(tr_idx.size, RULE_STAMPS)).astype(int))]
-        phys, pfit = _physical(robot, fit, kinds, _raw_rows(robot, prep, log.t[rule], kinds, True, v_s), log.tau[rule],
-                               A[test], prep.tau[test], R_te, tau_te, confidence, max(nu, 1.5), sigma_raw, seed)
+        phys, pfit = _physical(robot, fit, parts["white"], kinds, _raw_rows(robot, prep, log.t[rule], kinds, True, v_s),
+                               log.tau[rule], A[test], prep.tau[test], R_te, tau_te, confidence, max(nu, 1.5),
+                               sigma_raw, seed)
     return Identification(robot.describe() | {"coefficient_names": list(robot.coefficient_names)},
                           tuple(robot.coefficient_names), kinds, fit.x, fit.cov, p, fit.sigma, sigma_raw, ell,
                           filt, validation, reg, log.describe(), cons, held, sel, law, phys, pfit)
 
 
-def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confidence, dof, sigma_raw, seed):
+def _physical(robot, fit, metric, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confidence, dof, sigma_raw, seed):
     """The consistent fit, its ellipsoid, held-out validation and share of physical draws inside (JSON-ready)."""
     import time
 
@@ -342,7 +362,9 @@ def _physical(robot, fit, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confide
                            draws_inside, fit_physical, realise_log_cholesky, standard_of)
 
     t0 = time.perf_counter()
-    pf = fit_physical(robot, fit.x, fit.cov, R_tr, tau_tr, kinds, seed=seed)
+    # the white covariance is the projection's metric (it weighs the data against the prior; the reported
+    # covariance, fit.cov, shapes the ellipsoid below)
+    pf = fit_physical(robot, fit.x, metric, R_tr, tau_tr, kinds, seed=seed)
     elapsed = time.perf_counter() - t0
     p = robot.p
     # the bounds' ellipsoid: centred at the consistent estimate, shaped by the data's covariance (the
