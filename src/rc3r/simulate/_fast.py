@@ -3,9 +3,10 @@ supply, run in chunks.
 
 **Instantiation.** A robot names its kernel supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`
 ``(module, kc)`` (contract: :mod:`.engines._template`). :func:`instantiate` writes the source of
-:mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module into a
-cache directory keyed by :func:`rc3r._numba_cache.package_hash` (and, for a supply outside rc3r,
-the supply's own source), atomically and only once (the first writer wins, so numba's stamp, the
+:mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module and its
+``# law dispatch`` line replaced by the dispatch over the registered laws (:mod:`.engines._dispatch`) into a
+cache directory keyed by :func:`rc3r._numba_cache.package_hash` (and, for a supply or a law module outside
+rc3r, its own source), atomically and only once (the first writer wins, so numba's stamp, the
 file's time and size, stays valid), and imports it: numba caches its functions on disk like any
 module's. Any edit of a numba module of the package makes a new directory, hence a fresh compile.
 The directory is ``$NUMBA_CACHE_DIR/rc3r_engines`` if that is set, else the user's cache
@@ -41,6 +42,7 @@ from .. import _numba_cache
 from ..errors import ParameterError
 from . import METHODS, _limits, _result, _sample_grid
 from . import status as S
+from .engines import _dispatch
 from .steps import continuous_method, period_budget
 
 __all__ = ["CompiledSimulator", "simulator", "instantiate", "run", "CHUNK_S", "HMAX"]
@@ -124,9 +126,11 @@ def _write_once(path: Path, text: str) -> None:
 
 def instantiate(module: str):
     """The compiled integrators (:mod:`.engines.compiled`) instantiated on the kernel supply ``module``
-    (a dotted module name), imported once per process; ParameterError if it is no supply."""
-    if module in _INSTANCES:
-        return _INSTANCES[module]
+    (a dotted module name) and the registered laws (the dispatch :mod:`.engines._dispatch` writes), imported
+    once per process and registry; ParameterError if it is no supply."""
+    laws = _dispatch.signature()
+    if (module, laws) in _INSTANCES:
+        return _INSTANCES[(module, laws)]
     if not isinstance(module, str) or not _DOTTED.match(module):
         raise ParameterError(f"kernel supply must be a dotted module name, got {module!r}")
     try:
@@ -137,15 +141,18 @@ def instantiate(module: str):
     if missing:
         raise ParameterError(f"kernel supply {module!r} lacks {', '.join(missing)} (rc3r.simulate.engines._template)")
     template = (Path(__file__).resolve().parent / "engines" / "compiled.py").read_text()
-    if template.count(MARKER) != 1 or template.count(TANGENT_MARKER) != 1:
-        raise RuntimeError("rc3r.simulate.engines.compiled lost a kernel-supply line")
+    if template.count(MARKER) != 1 or template.count(TANGENT_MARKER) != 1 or template.count(_dispatch.MARKER) != 1:
+        raise RuntimeError("rc3r.simulate.engines.compiled lost a kernel-supply or law-dispatch line")
     source = template.replace(MARKER, MARKER.replace("rc3r.simulate.engines._template", module))
+    source = source.replace(_dispatch.MARKER, _dispatch.law_source())
     if all(hasattr(supply, f) for f in _TANGENTS):
         source = source.replace(TANGENT_MARKER, TANGENT_MARKER.replace("rc3r.simulate.engines._template", module))
     h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode() + source.encode())
     supply_file = getattr(supply, "__file__", None)
     if supply_file and not _numba_cache._inside(supply_file):  # outside the package: its own source counts
         h.update(Path(supply_file).read_bytes())
+    for law_file in _dispatch.law_files():  # so does a registered law's module outside the package
+        h.update(Path(law_file).read_bytes())
     key = h.hexdigest()[:16]
     stem = module.replace(".", "_")
     errors = []
@@ -164,7 +171,7 @@ def instantiate(module: str):
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod
     spec.loader.exec_module(mod)
-    _INSTANCES[module] = mod
+    _INSTANCES[(module, laws)] = mod
     return mod
 
 

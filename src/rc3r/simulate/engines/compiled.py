@@ -15,12 +15,12 @@ r"""The compiled engine's integrators, written once for any n and p (numba): a t
   state by forward Euler.
 
 Effects (``fx`` of :meth:`rc3r.plants.Plant.pack`, the loop's noise, quantization, delay) are applied by
-:mod:`rc3r.plants._kernels`; the law by :mod:`rc3r.controllers._kernels` (its integer code). The robot
-enters only through its **kernel supply** (:mod:`._template`) on its constants ``kc``. n is
-``U.shape[1]``, p is ``cp[0]``. Never run as it stands: :func:`rc3r.simulate._fast.instantiate` writes a
-copy per supply with the lines marked ``# kernel supply`` naming the supply's module (numba caches a
-module on disk, not a function that receives another jitted function), so every import here is
-absolute. Status codes: :mod:`rc3r.simulate.status`.
+:mod:`rc3r.plants._kernels`; the law by its integer code through the dispatch written from the law
+registry (the line marked ``# law dispatch``, :mod:`._dispatch`). The robot enters only through its
+**kernel supply** (:mod:`._template`) on its constants ``kc``. n is ``U.shape[1]``, p is ``cp[0]``. Never
+run as it stands: :func:`rc3r.simulate._fast.instantiate` writes a copy per supply with the lines marked
+``# kernel supply`` naming the supply's module and the dispatch in place of its marked line (numba caches
+a module on disk, not a function that receives another jitted function), so every import here is absolute. Status codes: :mod:`rc3r.simulate.status`.
 """
 from __future__ import annotations
 
@@ -29,11 +29,11 @@ import math
 import numpy as np
 from numba import njit
 
-from rc3r.controllers._kernels import inertia_gain, law_signals, law_slopes, law_theta, uses_xi
 from rc3r.plants._kernels import actuate, has_friction as _friction, joint_torque as _joint_torque, measure
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, tangents_into as _tangents  # kernel supply (optional)
-from rc3r.simulate.engines._jacobian import compose, work as _tangent_work, xi_rows
+from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
+from rc3r.simulate.engines._jacobian import work as _tangent_work
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
 from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
@@ -139,10 +139,10 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     if not (_tangents(kc, th, q, qd, v, a, D, wk) and _ptangents(kc, q, qd, F0[n:2 * n], Dp, wk)):
         return False
     law_slopes(law, cp, n, ref, jerk, G, Wx)
-    rows = xi_rows(law, cp, Y, r, tw)  # the directions b whose r^T d(Y b)/dz the law needs (tw[8])
+    rows = law_directions(law, cp, Y, r, tw)  # the directions b whose r^T d(Y b)/dz the law needs (tw[8])
     for i in range(rows):
         _tangents(kc, tw[8][i], q, qd, v, a, tw[13][i], wk)
-    return compose(law, cp, fx, x, u, Y, r, rows, tw, J, Ft)
+    return law_jacobian(law, cp, fx, x, u, Y, r, rows, tw, J, Ft)
 
 
 #: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
