@@ -45,6 +45,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.controllers.robust``            law ``robust``: Spong's eq. (6) (one module, as ``fbl``)
 ``rc3r.controllers.robust_coeff``      law ``robust-coeff``: eq. (7), per-coefficient bounds (one module)
 ``rc3r.controllers.adaptive``          law ``adaptive``: Slotine--Li's estimate as the law's state (one module)
+``rc3r.controllers.pd_plus``           law ``pd-plus``: Paden--Panja's PD+, the worked example of a compiled law
 ``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
 ``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
 ``rc3r.controllers.ellipsoid``         law ``robust-ellipsoid``: Spong's term for ||theta - theta_0||_P <= 1

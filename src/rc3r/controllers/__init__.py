@@ -16,6 +16,8 @@ serves every robot. With :math:`e = q - q_d`:
   :math:`\dot{\hat\theta} = -\Gamma Y^T r` (controller state :math:`\hat\theta`).
 * :class:`PDGravity` (``pd``) -- :math:`v = a = 0` (so :math:`Y\theta = g(q)`),
   :math:`w = -K_p e - K_d \dot e`.
+* :class:`PDPlus` (``pd-plus``) -- Paden and Panja's PD+: :math:`v = \dot q_d`, :math:`a = \ddot q_d`
+  (so :math:`Y\theta_0 = M \ddot q_d + C \dot q_d + g`), :math:`w = -K_p e - K_d \dot e`.
 
 Gains are diagonal: a scalar (same for every joint or coefficient) or a vector
 of the right length, strictly positive. Their defaults are the one gain table of
@@ -31,10 +33,11 @@ rc3r (the command line uses them too; ``docs/control.md`` says why each value).
 
 It runs with any robot in the generic Python engine (continuous or sampled time;
 ``examples/custom_law.py``). A **compiled** law is one module: its class, ``LAYOUT``, numba
-kernels, their derivatives and its C port (:mod:`rc3r.controllers.base`; ``docs/architecture.md``,
-"Adding a compiled law"). The robots' fast engines dispatch on its ``code`` (written from
-:data:`LAWS` when the engine is instantiated, :mod:`rc3r.simulate.engines._dispatch`); its Python
-methods call the same kernels, so each law's arithmetic exists once.
+kernels, their derivatives and its C port (:mod:`rc3r.controllers.base`; the worked example
+:mod:`rc3r.controllers.pd_plus`, ``docs/architecture.md``, "Adding a compiled law"). The robots'
+fast engines dispatch on its ``code`` (written from :data:`LAWS` when the engine is instantiated,
+:mod:`rc3r.simulate.engines._dispatch`); its Python methods call the same kernels, so each law's
+arithmetic exists once.
 """
 from __future__ import annotations
 
@@ -48,6 +51,7 @@ from .pd import PDGravity
 from .pd_gains import PDGains  # noqa: F401
 from .sliding import Sliding  # noqa: F401
 from . import ellipsoid as _ellipsoid  # noqa: E402,F401  (registers robust-ellipsoid: a Python law)
+from .pd_plus import PDPlus
 
 __all__ = [
     "Law",
@@ -57,6 +61,7 @@ __all__ = [
     "RobustPerCoefficient",
     "Adaptive",
     "PDGravity",
+    "PDPlus",
     "LAWS",
     "register_law",
     "make_law",
