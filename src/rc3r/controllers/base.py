@@ -132,17 +132,41 @@ def _scalar(name, arr) -> float:
 
 @register_jitable
 def at(ix, n, p):
-    """The offset in ``cp`` of the entry whose :meth:`Layout.index` is ``ix``, for n joints and p coefficients.
+    """The offset in ``cp`` of a packed entry.
 
-    Plain Python when called from Python (a law kernel's ``py_func``), inlined when compiled.
+    Plain Python when called from Python (a law kernel's ``py_func``), compiled into a kernel that calls it.
+
+    Parameters
+    ----------
+    ix : tuple of 4 int
+        The entry's :meth:`Layout.index` ``(c0, cn, cp, cnn)``.
+    n, p : int
+        Joints and coefficients.
+
+    Returns
+    -------
+    int
+        ``c0 + cn n + cp p + cnn n^2``, an index into ``cp``.
     """
     return ix[0] + ix[1] * n + ix[2] * p + ix[3] * n * n
 
 
 def packed(default, *entries: tuple[str, str]):
-    """A gain field packed for the compiled kernels: ``entries`` ``(name, size)`` (size ``"1"``, ``"n"``, ``"p"``,
-    ``"nn"``) in the order they enter ``cp`` (:meth:`Layout.of`; :meth:`Law._packed` gives their values); the
-    default is the field's."""
+    """A dataclass field of a law whose value the compiled kernels read from the packed vector.
+
+    Parameters
+    ----------
+    default : float or array_like
+        The field's default (the one gain table, :func:`default_gains`).
+    *entries : (str, str)
+        ``(name, size)`` of the entries it packs into, in order; size ``"1"`` (one number), ``"n"`` (per
+        joint), ``"p"`` (per coefficient) or ``"nn"`` (an n x n matrix, row-major). :meth:`Layout.of` lists
+        them; ``Law._packed`` gives their values.
+
+    Returns
+    -------
+    dataclasses.Field
+    """
     for name, size in entries:
         if size not in _SIZES:
             raise ValueError(f"packed entry {name!r}: size must be one of {', '.join(_SIZES)}, got {size!r}")
@@ -173,7 +197,8 @@ class Layout:
         return tuple(name for name, _ in self.entries)
 
     def index(self, name: str) -> tuple[int, int, int, int]:
-        """Coefficients ``(c0, cn, cp, cnn)`` of the offset ``c0 + cn n + cp p + cnn n^2`` of entry ``name``."""
+        """Coefficients ``(c0, cn, cp, cnn)`` of the offset ``c0 + cn n + cp p + cnn n^2`` of entry ``name``
+        (a module-level constant a kernel hands to :func:`at`); KeyError if there is none."""
         acc = [0, 0, 0, 0]
         for entry, size in self.entries:
             if entry == name:
@@ -190,7 +215,22 @@ class Layout:
         return sum(at(_SIZES[s], n, p) for _, s in self.entries)
 
     def slice(self, cp, name: str, n: int) -> np.ndarray:
-        """Entry ``name`` of the packed vector ``cp`` (n joints; p is ``cp[0]``): a view, shape (size,)."""
+        """Entry ``name`` of a packed vector.
+
+        Parameters
+        ----------
+        cp : (size,) ndarray
+            A law's :meth:`Law.pack` (p is ``cp[0]``).
+        name : str
+            An entry of this layout.
+        n : int
+            Joints.
+
+        Returns
+        -------
+        ndarray
+            A view, shape (1,), (n,), (p,) or (n * n,) by the entry's size.
+        """
         p = int(cp[0])
         size = dict(self.entries)[name]
         o = self.offset(name, n, p)
@@ -359,9 +399,25 @@ def register_law(cls: type[Law]) -> type[Law]:
     """Make ``cls`` available as ``make_law(cls.name, ...)``, ``--controller`` and ``[controller] kind``.
 
     A compiled law (``code`` not None) is registered after its module has defined its LAYOUT,
-    kernels and ``c_source`` (call it at the module's end); TypeError if one is missing, if LAYOUT is
-    not the layout of the class's fields, or if another law has the code. Usable as a class decorator
-    for a Python-only law.
+    kernels and ``c_source`` (call it at the module's end); the compiled engine's dispatch and
+    ``rc3r export`` then reach it. Usable as a class decorator for a Python-only law.
+
+    Parameters
+    ----------
+    cls : type
+        A :class:`Law` subclass with a ``name``.
+
+    Returns
+    -------
+    type
+        ``cls`` (its ``kernels`` set to its module if compiled).
+
+    Raises
+    ------
+    TypeError
+        Not a named Law subclass; a compiled law whose module lacks LAYOUT, ``USES_XI``, a value or
+        derivative kernel (numba) or ``c_source``, whose LAYOUT is not its fields', or whose code is
+        another law's.
     """
     if not (isinstance(cls, type) and issubclass(cls, Law)) or cls.name in ("?", ""):
         raise TypeError("register_law needs a Law subclass with a name")

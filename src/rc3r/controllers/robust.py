@@ -15,7 +15,8 @@ from numba import njit
 from ._kernels import regressor_transpose
 from .base import Layout, _nonnegative, _positive, _scalar, at, packed, register_law
 from .sliding import (C_XI_HEAD, Sliding, c_parts, inertia_gain, signals, slopes,  # noqa: F401
-                      xi_directions, xi_theta_columns)
+                      xi_directions)
+from .sliding import no_state_gain as state_gain, xi_theta_columns as theta_columns  # noqa: F401
 
 __all__ = ["Robust", "LAYOUT"]
 
@@ -88,18 +89,6 @@ def directions(cp, Y, r, xs, TB, om, bt):
     regressor_transpose(Y, r, xs)
     bt[0] = weights(cp, Y.shape[0], xs, om)
     return xi_directions(Y, om, xs, TB)
-
-
-@njit(**_DERIV)
-def theta_columns(cp, Y, rows, Ux, Xi, xs, bt):
-    """``Y d theta_eff/dc`` into ``Ux`` (:func:`rc3r.controllers.sliding.xi_theta_columns`)."""
-    xi_theta_columns(Y, rows, Ux, Xi, xs, bt)
-
-
-@njit(**_DERIV)
-def state_gain(cp, n):
-    """No controller state: an empty gain."""
-    return cp[0:0]
 
 
 _C_OUTPUT = C_XI_HEAD + """    {

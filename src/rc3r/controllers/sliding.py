@@ -21,7 +21,7 @@ from ..errors import ParameterError
 from .base import (Law, Layout, _gain_matrix, _is_matrix, _nonnegative, _positive, _scalar, _sized, at,
                    packed)
 
-__all__ = ["Sliding", "signals", "inertia_gain", "slopes", "xi_directions", "xi_theta_columns",
+__all__ = ["Sliding", "signals", "inertia_gain", "slopes", "xi_directions", "xi_theta_columns", "no_state_gain",
            "c_parts", "C_XI_HEAD"]
 
 _INLINE = dict(cache=True, nogil=True, inline="always")
@@ -149,9 +149,9 @@ def xi_directions(Y, om, xs, TB):
 
 
 @njit(**_DERIV)
-def xi_theta_columns(Y, rows, Ux, Xi, xs, bt):
-    """``Ux[:, :2n+1] += Y d theta_eff/dc = Xi[:n] + beta (Y xi) Xi[n]`` (beta ``bt[0]``; rows of
-    :func:`xi_directions`)."""
+def xi_theta_columns(cp, Y, rows, Ux, Xi, xs, bt):
+    """A robust law's ``theta_columns``: ``Ux[:, :2n+1] += Y d theta_eff/dc = Xi[:n] + beta (Y xi) Xi[n]``
+    (beta ``bt[0]``; rows of :func:`xi_directions`)."""
     n, p = Y.shape
     m = 2 * n + 1
     if rows > 0:
@@ -161,6 +161,12 @@ def xi_theta_columns(Y, rows, Ux, Xi, xs, bt):
                 yx += Y[i, k] * xs[k]
             for c in range(m):
                 Ux[i, c] += Xi[i, c] + bt[0] * yx * Xi[n, c]
+
+
+@njit(**_DERIV)
+def no_state_gain(cp, n):
+    """A robust law's ``state_gain``: no controller state, an empty gain."""
+    return cp[0:0]
 
 
 #: The C of a law's output up to its own part: ``th`` holds xi = Y^T r, ``nrm`` its norm.

@@ -60,20 +60,33 @@ def law_files(laws=None) -> list[str]:
 
 
 def law_source(laws=None) -> str:
-    """The Python source that replaces :data:`MARKER` in :mod:`.compiled`: the seven dispatch functions
-    (module docstring) over the compiled laws of ``laws`` (default :data:`rc3r.controllers.LAWS`)."""
+    """The Python source that replaces :data:`MARKER` in :mod:`.compiled`: the seven dispatch functions.
+
+    Parameters
+    ----------
+    laws : dict, optional
+        name -> law class (default :data:`rc3r.controllers.LAWS`); its compiled laws get one branch each
+        (laws whose kernel is one function share a branch naming each code), an unknown code raises.
+
+    Returns
+    -------
+    str
+        Module-level source: the law modules' imports and the seven ``@njit`` functions (module docstring).
+    """
     laws = compiled_laws(laws)
     if not laws:
         raise ValueError("no compiled law is registered")
     imports = [f"import {cls.__module__} as _law_{int(cls.code)}  # {cls.name}" for cls in laws]
 
     def branch(head, args_of, ret, kernel=None):
-        """``if code == c: ...`` per law; laws whose ``kernel`` is one function (the sliding laws' signals)
-        share one branch that names each of their codes (one inlined copy of the kernel, not three)."""
+        """``if code == c: ...`` per law; laws whose ``kernel`` (a name, or names) is the same function(s) (the
+        sliding laws' signals) share one branch that names each of their codes (one inlined copy, not three)."""
         groups: dict = {}
         for cls in laws:
-            fn = getattr(sys.modules[cls.__module__], kernel) if kernel else cls
-            groups.setdefault(id(fn), []).append(cls)
+            mod = sys.modules[cls.__module__]
+            names = kernel if isinstance(kernel, tuple) else (kernel,)
+            key = tuple(id(getattr(mod, k)) for k in names) if kernel else (id(cls),)
+            groups.setdefault(key, []).append(cls)
         lines = [head]
         for k, group in enumerate(groups.values()):
             test = " or ".join(f"code == {int(c.code)}" for c in group)
@@ -127,7 +140,7 @@ def law_source(laws=None) -> str:
             "    n = Y.shape[0]\n"
             "    _signal_columns(Y, r, rows, tw)",
             lambda a, c: [f"{a}.theta_columns(cp, Y, rows, Ux, Xi, xs, bt)", f"gam = {a}.state_gain(cp, n)"],
-            "_finish(fx, u, x, tw[1], Ux, Xi, gam, J, Ft, tw[11], tw[12])"),
+            "_finish(fx, u, x, tw[1], Ux, Xi, gam, J, Ft, tw[11], tw[12])", ("theta_columns", "state_gain")),
         "# ---- end of the law dispatch ----",
     ]
     return "\n".join(parts)
