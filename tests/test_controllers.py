@@ -421,7 +421,7 @@ def test_inertia_scaled_gain_default_bandwidth_and_small_bandwidths():
 def test_a_matrix_k_gives_w_equal_minus_k_r(name, rng):
     """A symmetric positive definite K (6 x 6) on the UR5: the law's torque equals Y theta_eff - K r with Y
     from Pinocchio's own regressor (``regressor_pinocchio``) and theta_eff computed here from its formula,
-    to 1e-10 relative (the compiled kernels pack K's diagonal and, last, its off-diagonal part)."""
+    to 1e-10 relative (the compiled kernels pack K's diagonal, a flag and its off-diagonal part)."""
     import rc3r
     from rc3r.controllers import make_law
 
@@ -432,7 +432,10 @@ def test_a_matrix_k_gives_w_equal_minus_k_r(name, rng):
     gains = {"robust": dict(rho=3.0, eps=5.0), "robust-coeff": dict(rho_i=np.full(arm.p, 0.2), eps_i=0.5),
              "adaptive": dict(Gamma=1.0)}[name]
     law = make_law(name, th, K=Kf, Lambda=20.0, **gains)
-    assert law.pack(6).size > make_law(name, th, K=np.diag(Kf), Lambda=20.0, **gains).pack(6).size
+    diag = make_law(name, th, K=np.diag(Kf), Lambda=20.0, **gains)
+    lay = law.layout()
+    assert lay.slice(law.pack(6), "K_matrix", 6)[0] == 1.0 and lay.slice(diag.pack(6), "K_matrix", 6)[0] == 0.0
+    assert np.array_equal(lay.slice(law.pack(6), "K_offdiag", 6).reshape(6, 6), Kf - np.diag(np.diag(Kf)))
     for _ in range(5):
         q, qd = rng.uniform(-1, 1, (2, 6))
         ref = rng.uniform(-1, 1, (3, 6))

@@ -36,7 +36,16 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.generated_chain``        what is generated (``FUNCTIONS``) and from what (a chain's constants)
 ``rc3r.robots.generated_sym``          their symbolic recursions and the C batch wrapper
 ``rc3r.controllers``                   control laws u = Y theta_eff + w and their registry
-``rc3r.controllers._kernels``          compiled kernels of the built-in laws (generic over n, p)
+``rc3r.controllers.base``              the law contract: :class:`Law`, its packed ``Layout``, ``LAWS``, ``register_law``
+``rc3r.controllers._kernels``          the compiled contractions every law shares: Y^T r, Y theta + w
+``rc3r.controllers.pd_gains``          Kp, Kd and the kernels of a law with theta_eff = theta_0 and no state
+``rc3r.controllers.fbl``               law ``fbl``: computed torque (class, LAYOUT, kernels, derivatives, C)
+``rc3r.controllers.pd``                law ``pd``: PD plus gravity compensation (one module, as ``fbl``)
+``rc3r.controllers.sliding``           what the laws on r = e_dot + Lambda e share: class, kernels, C parts
+``rc3r.controllers.robust``            law ``robust``: Spong's eq. (6) (one module, as ``fbl``)
+``rc3r.controllers.robust_coeff``      law ``robust-coeff``: eq. (7), per-coefficient bounds (one module)
+``rc3r.controllers.adaptive``          law ``adaptive``: Slotine--Li's estimate as the law's state (one module)
+``rc3r.controllers.pd_plus``           law ``pd-plus``: Paden--Panja's PD+, the worked example of a compiled law
 ``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
 ``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
 ``rc3r.controllers.ellipsoid``         law ``robust-ellipsoid``: Spong's term for ||theta - theta_0||_P <= 1
@@ -81,6 +90,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.engines._effects``     the plant-effect dispatch, generated from ``EFFECTS`` per instantiation
 ``rc3r.simulate.engines._linalg``      dense LU of the compiled integrators (kernel-independent)
 ``rc3r.simulate.engines._jacobian``    the closed loop's analytic Jacobian by the chain rule (kernel-independent)
+``rc3r.simulate.engines._dispatch``    the engine's dispatch over the laws, written from ``LAWS`` at instantiation
 ``rc3r.simulate.engines._tableaux``    the ROS4 and RODAS tables of those integrators (plain constants)
 ``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)
 ``rc3r.simulate.metrics``              scalar metrics of a run

@@ -56,8 +56,10 @@ GROUPS = {
          "tests/test_rr3_robot.py::test_forward_dynamics_equals_aba"],
     ),
     "controllers": (
-        ["src/rc3r/controllers/__init__.py", "src/rc3r/controllers/_kernels.py",
-         "src/rc3r/controllers/guarantee.py"],
+        ["src/rc3r/controllers/base.py", "src/rc3r/controllers/_kernels.py", "src/rc3r/controllers/fbl.py",
+         "src/rc3r/controllers/pd.py", "src/rc3r/controllers/pd_gains.py", "src/rc3r/controllers/sliding.py",
+         "src/rc3r/controllers/robust.py", "src/rc3r/controllers/robust_coeff.py",
+         "src/rc3r/controllers/adaptive.py", "src/rc3r/controllers/guarantee.py"],
         ["tests/test_controllers.py", "tests/test_guarantee.py"],
     ),
     "metrics": (
@@ -133,8 +135,8 @@ SAMPLE = {"model": 0.2, "controllers": 1.0, "metrics": 1.0, "bounds": 0.3, "plan
 #: code is wrong"), applied by hand with ``--named``: each must make its group's tests fail.
 #: (group, what, file, original text, mutated text)
 NAMED = [
-    ("controllers", "adaptive law ignores Gamma", "src/rc3r/controllers/_kernels.py",
-     "zdot[j] = -cp[s + j] * th_eff[j]", "zdot[j] = -th_eff[j]"),
+    ("controllers", "adaptive law ignores Gamma", "src/rc3r/controllers/adaptive.py",
+     "zdot[j] = -cp[g + j] * th_eff[j]", "zdot[j] = -th_eff[j]"),
     ("metrics", "rms computed as a root sum of squares", "src/rc3r/simulate/metrics.py",
      "np.sqrt((e ** 2).mean(axis=0))", "np.sqrt((e ** 2).sum(axis=0))"),
     ("metrics", "chattering on the decimated stored grid in sampled mode", "src/rc3r/simulate/metrics.py",
@@ -147,8 +149,8 @@ NAMED = [
      "G0 = 9.81", "G0 = 9.8"),
     ("model", "gravity term drops l2", "src/rc3r/robots/rr3/kernels.py",
      "th[5] * s23) / l2", "th[5] * s23)"),
-    ("controllers", "robust law uses min(||xi||, eps)", "src/rc3r/controllers/_kernels.py",
-     "scale = cp[s] / max(nrm, cp[s + 1])", "scale = cp[s] / min(nrm, cp[s + 1])"),
+    ("controllers", "robust law uses min(||xi||, eps)", "src/rc3r/controllers/robust.py",
+     "scale = cp[at(_RHO, n, p)] / max(nrm, cp[at(_EPS, n, p)])", "scale = cp[at(_RHO, n, p)] / min(nrm, cp[at(_EPS, n, p)])"),
     ("bounds", "paper rho as the largest coefficient deviation, not the norm", "src/rc3r/uncertainty/bounds.py",
      "rho=float(np.linalg.norm(th0 - th)),", "rho=float(np.max(np.abs(th0 - th))),"),
 ]

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from . import Law, _positive, _scalar, _sized, register_law
+from .base import Law, _positive, _scalar, _sized, register_law
 
 __all__ = ["RobustEllipsoid", "lyapunov_margin", "error_bound", "covers"]
 

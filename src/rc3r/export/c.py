@@ -2,7 +2,7 @@ r"""The controller of a run as C99 source: ``rc3r_controller.h`` and ``rc3r_cont
 
 :func:`controller_sources` writes the :class:`rc3r.Controller` of a run -- its reference trajectory
 (:func:`rc3r.trajectory.reference_into`), the model's Slotine--Li regressor, the law
-(:mod:`rc3r.controllers._kernels`: the same arithmetic, in the same order) with theta_0, rho, rho_i
+(its module's ``c_source``: the arithmetic of its kernels, in the same order) with theta_0, rho, rho_i
 and the gains, the law's state, the zero-order hold at the run's rate and the delay line -- as one
 C99 translation unit that needs nothing but libm. Every number is a literal, ``repr`` of the float:
 the shortest decimal (at most 17 significant digits) that reads back to the same double.
@@ -33,16 +33,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..controllers import Law
-from ..controllers import _kernels as K
+from ..controllers import LAWS, Law
 from ..errors import ConfigError
 from ..trajectory import Trajectory
 from .literals import c_array, c_double
 
-__all__ = ["c_double", "c_array", "regressor_source", "controller_sources", "check_exportable", "LAW_CODES"]
+__all__ = ["c_double", "c_array", "regressor_source", "controller_sources", "check_exportable", "law_codes"]
 
-#: Law codes (:mod:`rc3r.controllers._kernels`) with a C port.
-LAW_CODES = {K.FBL: "fbl", K.ROBUST: "robust", K.ROBUST_COEFF: "robust-coeff", K.ADAPTIVE: "adaptive", K.PD: "pd"}
+
+def law_codes() -> dict[int, str]:
+    """Code -> name of the registered laws with a C port: every compiled law (its module's ``c_source``)."""
+    return {cls.code: cls.name for cls in LAWS.values() if cls.code is not None}
 
 
 def regressor_source(model) -> str:
@@ -74,122 +75,36 @@ def check_exportable(law, trajectory) -> None:
     """ConfigError unless ``law`` is a built-in law with a C port and ``trajectory`` a packed kind."""
     cls = type(law)
     same = all(getattr(cls, m) is getattr(Law, m) for m in ("signals", "output", "torque"))
-    if law.code not in LAW_CODES or not same:
-        raise ConfigError(f"controller {law.name!r} has no C port (exportable: {', '.join(LAW_CODES.values())})")
+    codes = law_codes()
+    if law.code not in codes or law.kernels is None or not same:
+        raise ConfigError(f"controller {law.name!r} has no C port (exportable: {', '.join(codes.values())})")
     tp = trajectory.pack()
     if type(trajectory).evaluate is not Trajectory.evaluate or tp[0] not in (0.0, 1.0):
         raise ConfigError(f"trajectory {trajectory.describe()!r} has no C port (sines, quintic)")
 
 
-def _law_parts(law, n: int) -> tuple[str, str, str]:
-    """(constants, signals body, output body, coupling, schedule) of the law in C, from its packed vector
-    ``law.pack(n)`` (coupling: the off-diagonal part of a matrix K, after the per-joint loop; schedule: the
-    ``-K_inertia M(q) r`` of a scheduled K, before the regressor's evaluation; empty otherwise)."""
-    cp = np.asarray(law.pack(n), dtype=float)
-    p = law.p
-    g = 1 + p
-    s = g + 2 * n
-    code = law.code
-    consts = [] if code == K.ADAPTIVE else [f"static const double rc3r_theta0[RC3R_P] = {c_array(cp[1:1 + p])};"]
-    if code in (K.FBL, K.PD):
-        consts += [f"static const double rc3r_Kp[RC3R_N] = {c_array(cp[g:g + n])};",
-                   f"static const double rc3r_Kd[RC3R_N] = {c_array(cp[g + n:s])};"]
+def _constant(name: str, dims: str, value, comment: str) -> str:
+    """One ``static const double`` of a law's C port: a number (``dims`` empty), a vector or an (n, n) matrix."""
+    if not dims:
+        text = c_double(float(value))
+    elif np.ndim(value) == 2:
+        text = "{" + ", ".join(c_array(row) for row in np.asarray(value)) + "}"
     else:
-        consts += [f"static const double rc3r_K[RC3R_N] = {c_array(cp[g:g + n])};",
-                   f"static const double rc3r_Lambda[RC3R_N] = {c_array(cp[g + n:s])};"]
-    if code == K.ROBUST:
-        consts += [f"static const double rc3r_rho = {c_double(cp[s])};",
-                   f"static const double rc3r_eps = {c_double(cp[s + 1])};"]
-    elif code == K.ROBUST_COEFF:
-        consts += [f"static const double rc3r_rho_i[RC3R_P] = {c_array(cp[s:s + p])};",
-                   f"static const double rc3r_eps_i[RC3R_P] = {c_array(cp[s + p:s + 2 * p])};"]
-    elif code == K.ADAPTIVE:
-        consts += [f"static const double rc3r_Gamma[RC3R_P] = {c_array(cp[s:s + p])};"]
-    coupling = schedule = ""
-    o = s + {K.ROBUST: 2, K.ROBUST_COEFF: 2 * p, K.ADAPTIVE: p}.get(code, 0)  # the tail: [b, has_matrix, Kc]
-    if code not in (K.FBL, K.PD) and cp[o] > 0.0:  # K(q) = K + b M(q): M(q) r through the regressor
-        consts += [f"static const double rc3r_K_inertia = {c_double(cp[o])};  /* b [1/s] */",
-                   f"static const double rc3r_theta_K[RC3R_P] = {c_array(cp[1:1 + p])};  /* M's theta */"]
-        schedule = """    {  /* scheduled K: w -= b (Y(q, 0, 0, r) - Y(q, 0, 0, 0)) theta = b M(q) r */
-        double zero[RC3R_N], m1[RC3R_N], m0[RC3R_N];
-        int i;
-        for (i = 0; i < RC3R_N; ++i)
-            zero[i] = 0.0;
-        rc3r_regressor_eval(&wk, q, zero, zero, r);
-        rc3r_regressor_apply(&wk, rc3r_theta_K, zero, m1);
-        rc3r_regressor_eval(&wk, q, zero, zero, zero);
-        rc3r_regressor_apply(&wk, rc3r_theta_K, zero, m0);
-        for (i = 0; i < RC3R_N; ++i)
-            w[i] -= rc3r_K_inertia * (m1[i] - m0[i]);
-    }
-"""
-    if code not in (K.FBL, K.PD) and cp[o + 1] != 0.0:  # a matrix K: w -= K_offdiag r
-        o += 2
-        rows = ", ".join(c_array(row) for row in cp[o:o + n * n].reshape(n, n))
-        consts += [f"static const double rc3r_Kc[RC3R_N][RC3R_N] = {{{rows}}};  /* K's off-diagonal part */"]
-        coupling = """    for (i = 0; i < RC3R_N; ++i) {  /* a matrix K: its off-diagonal part */
-        double acc = 0.0;
-        int j;
-        for (j = 0; j < RC3R_N; ++j)
-            acc += rc3r_Kc[i][j] * r[j];
-        w[i] -= acc;
-    }
-"""
+        text = c_array(np.asarray(value))
+    return f"static const double {name}{dims} = {text};" + (f"  /* {comment} */" if comment else "")
+
+
+def _law_parts(law, n: int) -> tuple[str, str, str, str, str]:
+    """(constants, signals body, output body, coupling, schedule) of the law in C: its module's ``c_source``
+    (:mod:`rc3r.controllers.base`), whose numbers come from ``law.pack(n)`` through the law's LAYOUT
+    (coupling: the off-diagonal part of a matrix K, after the per-joint loop; schedule: the
+    ``-K_inertia M(q) r`` of a scheduled K, before the regressor's evaluation; empty otherwise)."""
+    part = law.kernels.c_source(law, n)
+    consts = [_constant(*c) for c in part["constants"]]
     z0 = np.asarray(law.initial_state(), dtype=float)
     if z0.size:
-        consts += [f"static const double rc3r_z0[RC3R_NZ] = {c_array(z0)};  /* theta_0: the initial estimate */"]
-    if code == K.FBL:
-        signals = """        v[i] = qd[i];
-        a[i] = ref[2][i] + rc3r_Kd[i] * (ref[1][i] - qd[i]) + rc3r_Kp[i] * (ref[0][i] - q[i]);
-        r[i] = 0.0;
-        w[i] = 0.0;"""
-    elif code == K.PD:
-        signals = """        v[i] = 0.0;
-        a[i] = 0.0;
-        r[i] = 0.0;
-        w[i] = rc3r_Kp[i] * (ref[0][i] - q[i]) + rc3r_Kd[i] * (ref[1][i] - qd[i]);"""
-    else:
-        signals = """        const double lam = rc3r_Lambda[i];
-        const double e = q[i] - ref[0][i];
-        const double ed = qd[i] - ref[1][i];
-        r[i] = ed + lam * e;
-        v[i] = ref[1][i] - lam * e;
-        a[i] = ref[2][i] - lam * ed;
-        w[i] = -rc3r_K[i] * r[i];"""
-    if code in (K.FBL, K.PD):
-        output = """    int j;
-    (void)wk; (void)r; (void)z; (void)zdot;
-    for (j = 0; j < RC3R_P; ++j)
-        th[j] = rc3r_theta0[j];
-    return 0.0;"""
-    else:
-        head = """    double nrm2 = 0.0, nrm;
-    int j;
-    rc3r_regressor_xi(wk, r, th);  /* th holds xi = Y^T r first */
-    for (j = 0; j < RC3R_P; ++j)
-        nrm2 += th[j] * th[j];
-    nrm = sqrt(nrm2);
-"""
-        if code == K.ROBUST:  # eq. (6): delta = -rho xi / max(||xi||, eps)
-            body = """    {
-        const double scale = rc3r_rho / (rc3r_eps > nrm ? rc3r_eps : nrm);
-        (void)z; (void)zdot;
-        for (j = 0; j < RC3R_P; ++j)
-            th[j] = rc3r_theta0[j] - scale * th[j];
-    }"""
-        elif code == K.ROBUST_COEFF:  # eq. (7): delta_i = -rho_i xi_i / max(|xi_i|, eps_i)
-            body = """    (void)z; (void)zdot;
-    for (j = 0; j < RC3R_P; ++j) {
-        const double x = fabs(th[j]);
-        th[j] = rc3r_theta0[j] - rc3r_rho_i[j] * th[j] / (rc3r_eps_i[j] > x ? rc3r_eps_i[j] : x);
-    }"""
-        else:  # adaptive: theta_hat = z, d theta_hat / dt = -Gamma Y^T r
-            body = """    for (j = 0; j < RC3R_P; ++j) {
-        zdot[j] = -rc3r_Gamma[j] * th[j];
-        th[j] = z[j];
-    }"""
-        output = head + body + "\n    return nrm;"
-    return "\n".join(consts), signals, output, coupling, schedule
+        consts += [_constant("rc3r_z0", "[RC3R_NZ]", z0, "theta_0: the initial estimate")]
+    return "\n".join(consts), part["signals"], part["output"], part.get("coupling", ""), part.get("schedule", "")
 
 
 def _reference_source(trajectory) -> str:
@@ -316,7 +231,7 @@ _SOURCE = """/* rc3r_controller.c -- @TITLE@
 /* ---- the model's regressor ---- */
 @REGRESSOR@
 
-/* ---- the law (rc3r.controllers._kernels): @LAW@ ---- */
+/* ---- the law (rc3r.controllers): @LAW@ ---- */
 @CONSTANTS@
 
 static void rc3r_law_signals(const double *q, const double *qd, double ref[3][RC3R_N],

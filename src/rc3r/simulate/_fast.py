@@ -3,9 +3,10 @@ supply, run in chunks.
 
 **Instantiation.** A robot names its kernel supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`
 ``(module, kc)`` (contract: :mod:`.engines._template`). :func:`instantiate` writes the source of
-:mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module into a
-cache directory keyed by :func:`rc3r._numba_cache.package_hash` (and, for a supply outside rc3r,
-the supply's own source), atomically and only once (the first writer wins, so numba's stamp, the
+:mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module and its
+``# law dispatch`` line replaced by the dispatch over the registered laws (:mod:`.engines._dispatch`) into a
+cache directory keyed by :func:`rc3r._numba_cache.package_hash` (and, for a supply or a law module outside
+rc3r, its own source), atomically and only once (the first writer wins, so numba's stamp, the
 file's time and size, stays valid), and imports it: numba caches its functions on disk like any
 module's. Any edit of a numba module of the package makes a new directory, hence a fresh compile.
 The directory is ``$NUMBA_CACHE_DIR/rc3r_engines`` if that is set, else the user's cache
@@ -41,6 +42,7 @@ from .. import _numba_cache
 from ..errors import ParameterError
 from . import METHODS, _limits, _result, _sample_grid
 from . import status as S
+from .engines import _dispatch
 from .steps import continuous_method, period_budget
 
 __all__ = ["CompiledSimulator", "simulator", "instantiate", "run", "CHUNK_S", "HMAX"]
@@ -124,15 +126,17 @@ def _write_once(path: Path, text: str) -> None:
 
 def instantiate(module: str):
     """The compiled integrators (:mod:`.engines.compiled`) instantiated on the kernel supply ``module``
-    (a dotted module name) and on the plant effects registered now (:data:`rc3r.plants.EFFECTS`, through
-    the dispatch :func:`.engines._effects.source` writes beside it), imported once per process and
-    registry; ParameterError if it is no supply."""
+    (a dotted module name), on the registered laws (the law dispatch :mod:`.engines._dispatch` writes into
+    it) and on the plant effects registered now (:data:`rc3r.plants.EFFECTS`, through the dispatch
+    :func:`.engines._effects.source` writes beside it), imported once per process and registries;
+    ParameterError if it is no supply."""
     from ..plants import EFFECTS
     from .engines import _effects
 
+    laws = _dispatch.signature()
     codes = tuple((c.code, c.name, c.value_kernel, c.slope_kernel) for c in _effects.compiled_effects(EFFECTS))
-    if (module, codes) in _INSTANCES:
-        return _INSTANCES[(module, codes)]
+    if (module, laws, codes) in _INSTANCES:
+        return _INSTANCES[(module, laws, codes)]
     if not isinstance(module, str) or not _DOTTED.match(module):
         raise ParameterError(f"kernel supply must be a dotted module name, got {module!r}")
     try:
@@ -143,9 +147,10 @@ def instantiate(module: str):
     if missing:
         raise ParameterError(f"kernel supply {module!r} lacks {', '.join(missing)} (rc3r.simulate.engines._template)")
     template = (Path(__file__).resolve().parent / "engines" / "compiled.py").read_text()
-    if template.count(MARKER) != 1 or template.count(TANGENT_MARKER) != 1:
-        raise RuntimeError("rc3r.simulate.engines.compiled lost a kernel-supply line")
+    if template.count(MARKER) != 1 or template.count(TANGENT_MARKER) != 1 or template.count(_dispatch.MARKER) != 1:
+        raise RuntimeError("rc3r.simulate.engines.compiled lost a kernel-supply or law-dispatch line")
     source = template.replace(MARKER, MARKER.replace("rc3r.simulate.engines._template", module))
+    source = source.replace(_dispatch.MARKER, _dispatch.law_source())
     if all(hasattr(supply, f) for f in _TANGENTS):
         source = source.replace(TANGENT_MARKER, TANGENT_MARKER.replace("rc3r.simulate.engines._template", module))
     if source.count(_effects.MARKER) != 1 or source.count("from rc3r.simulate.engines._effects import") != 1:
@@ -153,12 +158,14 @@ def instantiate(module: str):
     dispatch = _effects.source(EFFECTS)
     h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode() + source.encode() + b"\0"
                        + dispatch.encode())
-    # every module the instantiated text imports counts: the supply and the effects' kernel modules (inside
-    # the package, package_hash covers those that use numba; outside, their own source)
+    # every module the instantiated text imports counts: the supply, the laws' and the effects' kernel
+    # modules (inside the package, package_hash covers those that use numba; outside, their own source)
     for name_ in (module,) + _effects.kernel_modules(EFFECTS):
         file_ = getattr(sys.modules.get(name_) or importlib.import_module(name_), "__file__", None)
         if file_ and not _numba_cache._inside(file_):
             h.update(Path(file_).read_bytes())
+    for law_file in _dispatch.law_files():  # a registered law's module outside the package
+        h.update(Path(law_file).read_bytes())
     key = h.hexdigest()[:16]
     stem = module.replace(".", "_")
     effects_name = f"_rc3r_effects_{key}"
@@ -178,7 +185,7 @@ def instantiate(module: str):
     if effects_name not in sys.modules:
         _load(effects_name, path.with_name(f"{effects_name}.py"))
     mod = _load(f"_rc3r_engine_{stem}_{key}", path)
-    _INSTANCES[(module, codes)] = mod
+    _INSTANCES[(module, laws, codes)] = mod
     return mod
 
 

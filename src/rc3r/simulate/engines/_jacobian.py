@@ -6,7 +6,7 @@ side per state and one for t: 7 of RODAS's 13 evaluations per step on the 3R. Wh
 defines ``tangents_into`` and ``plant_tangents_into`` (:mod:`._template`; the 3R's come from SymPy,
 :mod:`rc3r.robots.rr3.tangents`), :func:`rc3r.simulate.engines.compiled._tangent_jacobian` composes
 them instead, exactly (to rounding). With the columns ``c = (q, qd, t)`` (m = 2n + 1) and the law's
-signals ``(v, a, r, w)`` (slopes ``G``, ``W_x`` of :func:`rc3r.controllers._kernels.law_slopes`):
+signals ``(v, a, r, w)`` (slopes ``G``, ``W_x`` of the law's ``slopes`` kernel, :mod:`rc3r.controllers.base`):
 
 .. math::
 
@@ -18,31 +18,33 @@ signals ``(v, a, r, w)`` (slopes ``G``, ``W_x`` of :func:`rc3r.controllers._kern
 where ``D`` = d(Y theta_eff)/d(q, qd, v, a), ``X`` = d(Y^T r)/d(q, qd, v, a), ``Z_c`` the slopes of
 ``(q, qd, v, a)``, ``u_a`` the torque after the actuator's clip (slope 0 on a clipped joint) and
 ``tau = u_a + sum_k tau_k(qd)`` (the effects' slopes come from their own modules, :func:`finish`). The
-adaptive law adds the columns of z: ``U_z = Y``, ``dz/dt = -Gamma xi``.
+law-independent parts are here (:func:`signal_columns`, :func:`finish`); a
+law's own (``Theta_c`` through its ``directions`` and ``theta_columns``, the adaptive law's columns of z
+``U_z = Y`` and ``dz/dt = -Gamma xi`` through ``state_gain``) are in its module, and the dispatch
+(:mod:`._dispatch`) joins them.
 A law with a scheduled ``K_inertia`` is differentiated numerically (the caller falls back).
 ``tests/test_jacobian.py`` checks J and f_t against central differences of the right-hand side for
 every compiled law, with friction and a clipping torque limit.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 from numba import njit
 
-from rc3r.controllers._kernels import ROBUST, regressor_transpose, uses_xi
 from rc3r.simulate.engines._linalg import _lu_factor
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
-_INLINE = dict(_JIT, inline="always")  # the helpers of compose: one copy, in it
+_INLINE = dict(_JIT, inline="always")  # the helpers of the dispatch's law_jacobian: one copy, in it
 
 
 @njit(**_JIT)
 def work(n, p, nz):
-    """Scratch of :func:`compose` and :func:`rc3r.simulate.engines.compiled._tangent_jacobian` for n joints,
+    """Scratch of the analytic Jacobian (:func:`rc3r.simulate.engines.compiled._tangent_jacobian`) for n joints,
     p coefficients and nz controller states: ``(D, Dp, yt, G, Wx, Ux, Xi, jerk, TB, xs, om, Mw, piv, DA, bt, es)``;
-    ``TB`` (R, p) the directions b of :func:`xi_rows`, ``DA`` (R, n, 4n) the supply's tangents at them, ``es``
-    (2, n) the plant effects' slopes (``effect_slopes`` of the engine's effect dispatch)."""
+    ``TB`` (R, p) the directions b of the law's ``directions`` kernel, ``DA`` (R, n, 4n) the supply's tangents
+    at them; ``xs`` xi, ``om`` and ``bt`` its weights (:mod:`rc3r.controllers.base`); ``es`` (2, n) the plant
+    effects' slopes (``effect_slopes`` of the engine's effect dispatch)."""
     m = 2 * n + 1
     R = max(n, nz) + 1
     return (np.empty((n, 4 * n)), np.empty((n, 4 * n)), np.empty(n), np.empty((3, n, 3)), np.empty((n, m)),
@@ -146,64 +148,15 @@ def row_slope(D, r, G, yt, out):
 
 
 @njit(**_INLINE)
-def robust_weights(code, cp, n, xi, om):
-    r"""The robust laws' ``d theta_eff = diag(om) d xi + beta xi (xi^T d xi)``; returns beta.
-
-    Eq. (6), ``theta_eff = theta_0 - rho xi / max(||xi||, eps)``: ``om = -rho / max(||xi||, eps)``, and
-    ``beta = rho / ||xi||^3`` outside the layer, 0 inside. Eq. (7), per coefficient: ``om_k = -rho_k / eps_k``
-    inside its layer ``|xi_k| <= eps_k``, 0 outside (there theta_k = theta_0k - rho_k sign(xi_k)), beta = 0.
-    """
-    p = xi.shape[0]
-    s = 1 + p + 2 * n
-    if code == ROBUST:
-        nrm = 0.0
-        for k in range(p):
-            nrm += xi[k] * xi[k]
-        nrm = math.sqrt(nrm)
-        rho, eps = cp[s], cp[s + 1]
-        o = -rho / max(nrm, eps)
-        for k in range(p):
-            om[k] = o
-        return rho / (nrm * nrm * nrm) if nrm > eps else 0.0
-    for k in range(p):
-        om[k] = -cp[s + k] / cp[s + p + k] if abs(xi[k]) <= cp[s + p + k] else 0.0
-    return 0.0
-
-
-@njit(**_JIT)
-def xi_rows(law, cp, Y, r, tw):
-    """Fill ``tw``'s ``TB`` with the directions b whose ``b^T d(Y^T r)`` the law needs and return their count:
-    none for FBL and PD; the unit vectors (the p rows of d xi) for the adaptive law; for the robust laws
-    ``om * Y[i]`` (i < n) and ``xi`` (:func:`robust_weights`; beta into ``tw``'s ``bt``). Also ``xs`` = xi."""
-    TB, xs, om, bt = tw[8], tw[9], tw[10], tw[14]
-    n, p = Y.shape
-    if not uses_xi(law):
-        return 0
-    regressor_transpose(Y, r, xs)
-    if tw[5].shape[1] > 2 * n + 1:  # controller states: the adaptive law
-        for i in range(p):
-            for k in range(p):
-                TB[i, k] = 1.0 if k == i else 0.0
-        return p
-    bt[0] = robust_weights(law, cp, n, xs, om)
-    for i in range(n + 1):
-        for k in range(p):
-            TB[i, k] = om[k] * Y[i, k] if i < n else xs[k]
-    return n + 1
-
-
-@njit(**_JIT)
-def compose(law, cp, es, x, u, Y, r, rows, tw, J, Ft):
-    """``J`` (N, N), ``Ft`` (N,) of the closed loop at x (module docstring) from the law's torque ``u``, the
-    formed ``Y``, ``r``, the plant effects' slopes ``es`` (:func:`finish`), and in ``tw`` the supply's tangents
-    ``D`` (at theta_eff), ``Dp`` (the plant's), ``DA[:rows]`` (at the directions of :func:`xi_rows`) and the
-    law's slopes ``G``, ``Wx``. False if M(q) is singular."""
-    D, Dp, yt, G, Wx, Ux, Xi, TB, xs, DA, bt = tw[0], tw[1], tw[2], tw[3], tw[4], tw[5], tw[6], tw[8], tw[9], \
-        tw[13], tw[14]
+def signal_columns(Y, r, rows, tw):
+    """The law-independent part of ``U_c`` and ``Xi_c`` (module docstring): ``Ux[:, :2n+1]`` (``tw[5]``) =
+    ``W_x + D Z_c`` and, for each of the ``rows`` directions b of the law's ``directions`` (``tw[8]``, the
+    supply's tangents at them in ``tw[13]``), ``Xi[i]`` (``tw[6]``) = ``b_i^T dxi/dc``. The law's own part
+    (its ``theta_columns``) and :func:`finish` follow (the dispatch's ``law_jacobian``, :mod:`._dispatch`)."""
+    D, yt, G, Wx, Ux, Xi, TB, DA = tw[0], tw[2], tw[3], tw[4], tw[5], tw[6], tw[8], tw[13]
     n, p = Y.shape
     m = 2 * n + 1
-    nz = x.shape[0] - 2 * n
-    through_signals(D, G, Ux)  # U_c = W_c + d(Y theta_eff)/dz Z_c (+ Y dtheta_eff/dc below)
+    through_signals(D, G, Ux)  # U_c = W_c + d(Y theta_eff)/dz Z_c (+ Y dtheta_eff/dc: the law's)
     for i in range(n):
         for c in range(m):
             Ux[i, c] += Wx[i, c]
@@ -214,15 +167,3 @@ def compose(law, cp, es, x, u, Y, r, rows, tw, J, Ft):
                 acc += Y[j, k] * TB[i, k]
             yt[j] = acc
         row_slope(DA[i], r, G, yt, Xi[i])
-    if rows > 0 and nz == 0:  # robust: Y dtheta/dc = Y diag(om) dxi/dc + beta (Y xi)(xi^T dxi/dc)
-        for i in range(n):
-            yx = 0.0
-            for k in range(p):
-                yx += Y[i, k] * xs[k]
-            for c in range(m):
-                Ux[i, c] += Xi[i, c] + bt[0] * yx * Xi[n, c]
-    for i in range(n):  # adaptive: u = w + Y z
-        for k in range(nz):
-            Ux[i, m + k] = Y[i, k]
-    s = 1 + p + 2 * n
-    return finish(es, x, Dp, Ux, Xi, cp[s:s + nz], J, Ft, tw[11], tw[12])

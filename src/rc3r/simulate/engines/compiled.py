@@ -14,14 +14,14 @@ r"""The compiled engine's integrators, written once for any n and p (numba): a t
   steps (:func:`_rodas_period`) or ROS4 steps (:func:`_stiff_period`) on the plant alone; the controller
   state by forward Euler.
 
-Effects (``fx`` of :meth:`rc3r.plants.Plant.pack`) are applied by the dispatch generated from
-:data:`rc3r.plants.EFFECTS` (:mod:`._effects`, the line marked ``# effect dispatch``; each effect's kernels
-live in its module), the loop's noise and quantization by :mod:`rc3r.plants._kernels`; the law by
-:mod:`rc3r.controllers._kernels` (its integer code). The robot enters only through its **kernel supply** (:mod:`._template`) on its constants ``kc``. n is
-``U.shape[1]``, p is ``cp[0]``. Never run as it stands: :func:`rc3r.simulate._fast.instantiate` writes a
-copy per supply with the lines marked ``# kernel supply`` naming the supply's module (numba caches a
-module on disk, not a function that receives another jitted function), so every import here is
-absolute. Status codes: :mod:`rc3r.simulate.status`.
+Plant effects (``fx`` of :meth:`rc3r.plants.Plant.pack`) act through the dispatch written from
+:data:`rc3r.plants.EFFECTS` (:mod:`._effects`, line ``# effect dispatch``), the law through the one written
+from the law registry (:mod:`._dispatch`, line ``# law dispatch``), the loop's noise and quantization by
+:mod:`rc3r.plants._kernels`. The robot enters only through its **kernel supply** (:mod:`._template`) on
+its constants ``kc``; n is ``U.shape[1]``, p is ``cp[0]``. Never run as it stands:
+:func:`rc3r.simulate._fast.instantiate` writes a copy per supply, ``# kernel supply`` lines naming its
+module, dispatches in place of their lines (numba caches a module on disk, not a function that receives
+another jitted function), so every import here is absolute. Status codes: :mod:`rc3r.simulate.status`.
 """
 from __future__ import annotations
 
@@ -30,12 +30,12 @@ import math
 import numpy as np
 from numba import njit
 
-from rc3r.controllers._kernels import inertia_gain, law_signals, law_slopes, law_theta, uses_xi
 from rc3r.plants._kernels import measure
 from rc3r.simulate.engines._effects import CODES as EFFECT_CODES, actuate, damping as _damping, effect_slopes as _effect_slopes, has_torque as _friction, joint_torque as _joint_torque  # noqa: F401 - effect dispatch
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, tangents_into as _tangents  # kernel supply (optional)
-from rc3r.simulate.engines._jacobian import compose, work as _tangent_work, xi_rows
+from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
+from rc3r.simulate.engines._jacobian import work as _tangent_work
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
 from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
@@ -141,11 +141,11 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     if not (_tangents(kc, th, q, qd, v, a, D, wk) and _ptangents(kc, q, qd, F0[n:2 * n], Dp, wk)):
         return False
     law_slopes(law, cp, n, ref, jerk, G, Wx)
-    rows = xi_rows(law, cp, Y, r, tw)  # the directions b whose r^T d(Y b)/dz the law needs (tw[8])
+    rows = law_directions(law, cp, Y, r, tw)  # the directions b whose r^T d(Y b)/dz the law needs (tw[8])
     for i in range(rows):
         _tangents(kc, tw[8][i], q, qd, v, a, tw[13][i], wk)
     _effect_slopes(fx, u, qd, tw[15])  # the plant effects' slopes at the delivered u and qd
-    return compose(law, cp, tw[15], x, u, Y, r, rows, tw, J, Ft)
+    return law_jacobian(law, cp, tw[15], x, u, Y, r, rows, tw, J, Ft)
 
 
 #: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
