@@ -3,6 +3,8 @@ divergence handling, and the paper's section-4 numbers."""
 from __future__ import annotations
 
 import importlib
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -97,13 +99,21 @@ def test_robust_laws_default_to_rodas_and_it_is_stiffly_accurate(plant, bounds, 
 
 
 def test_method_codes_are_the_templates():
-    """rc3r.simulate.METHODS (the names SimOptions takes) maps each name to the compiled template's
-    own code for that method (engines.compiled.ODE23S, ROS4, RODAS): the two are written in two modules."""
-    from rc3r.simulate import METHODS
+    """rc3r.simulate.METHODS and SAMPLED_METHODS (the names SimOptions takes) map each name to the compiled
+    template's own code for that method: both read rc3r.simulate.methods, the one place the codes are written
+    (the template imports them, so its codes are the module's own objects), and the codes are distinct."""
+    from rc3r.simulate import METHODS, SAMPLED_METHODS, _fast, methods
     from rc3r.simulate.engines import compiled
 
+    assert METHODS is methods.METHODS and _fast.PERIOD_METHODS is methods.PERIOD_METHODS
     assert METHODS == {"ode23s": compiled.ODE23S, "ros4": compiled.ROS4, "rodas": compiled.RODAS}
     assert len({compiled.ODE23S, compiled.ROS4, compiled.RODAS}) == 3
+    assert methods.PERIOD_METHODS == {"rk4": compiled.RK4_PERIODS, "ros4": compiled.ROS4_PERIODS,
+                                      "rodas": compiled.RODAS_PERIODS, "sdirk": methods.SDIRK_PERIODS}
+    assert len(set(methods.PERIOD_METHODS.values())) == 4
+    assert SAMPLED_METHODS == ("auto", "rk4", "ros4", "rodas", "sdirk")
+    src = Path(compiled.__file__).read_text()
+    assert not re.search(r"^\s*(ODE23S|ROS4|RODAS|RK4_PERIODS)\b.*=\s*\d", src, re.M)  # no second definition
 
 
 def test_bad_method_is_refused():

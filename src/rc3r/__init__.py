@@ -38,6 +38,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.controllers``                   control laws u = Y theta_eff + w and their registry
 ``rc3r.controllers._kernels``          compiled kernels of the built-in laws (generic over n, p)
 ``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
+``rc3r.controllers.sampled``           the sampled loop in Python: hold, delay line, Euler step of z (engine and Controller)
 ``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
 ``rc3r.controllers.ellipsoid``         law ``robust-ellipsoid``: Spong's term for ||theta - theta_0||_P <= 1
 ``rc3r.trajectory``                    desired trajectories (sines, quintic), compiled evaluation
@@ -83,6 +84,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.metrics``              scalar metrics of a run
 ``rc3r.simulate.verdict``              what a run means: clean, chattering, saturated, limit-violated, diverged
 ``rc3r.simulate.status``               status codes and the compiled bound check
+``rc3r.simulate.methods``              the integration methods' names and codes, written once (SimOptions and the template)
 ``rc3r.simulate.steps``                how a sampled run advances the plant: RK4 sub-steps, implicit periods
 ``rc3r.simulate.export``               a result as a table, CSV, figure, run directory
 ``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`

@@ -55,6 +55,7 @@ import numpy as np
 from ..errors import DivergenceError, ParameterError
 from . import status as S
 from .engines.base import engine_names as _engine_names
+from .methods import METHODS, SAMPLED_METHODS
 from .steps import (EFFECT_SUBSTEP_S, MAX_STEP_ANGLE, RIGID_SUBSTEP_S, STIFF_STEP, _resolve_steps, _steps,  # noqa: F401
                     _too_fast, continuous_method, default_substeps, period_budget, plant_method, stiffness)
 
@@ -70,13 +71,8 @@ ENGINES = _engine_names()
 #: 3R are ~0.6 GB. A longer run must lower ``output_rate``.
 MAX_ROWS = 5_000_000
 
-#: The fast engine's continuous-time Rosenbrock methods: name -> code of
-#: :func:`rc3r.simulate.engines.compiled.integrate_continuous` (its ``ODE23S``, ``ROS4``, ``RODAS``);
-#: :attr:`SimOptions.method` also takes ``"auto"`` (:func:`continuous_method`).
-METHODS = {"ros4": 1, "ode23s": 0, "rodas": 2}
-
-#: Ways of advancing the plant over a sampling period (:attr:`SimOptions.sampled_method`).
-SAMPLED_METHODS = ("auto", "rk4", "ros4", "rodas", "sdirk")
+#: :data:`METHODS` (continuous-time Rosenbrock methods: name -> the compiled integrator's code) and
+#: :data:`SAMPLED_METHODS` (ways of advancing the plant over a period) are :mod:`.methods`'.
 
 #: Most controller samples of a sampled run (1e9 samples take hours even compiled).
 MAX_SAMPLES = 1_000_000_000

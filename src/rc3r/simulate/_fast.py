@@ -39,7 +39,8 @@ import numpy as np
 
 from .. import _numba_cache
 from ..errors import ParameterError
-from . import METHODS, _limits, _result, _sample_grid
+from . import _limits, _result, _sample_grid
+from .methods import METHODS, PERIOD_METHODS
 from . import status as S
 from .steps import continuous_method, period_budget
 
@@ -48,10 +49,6 @@ __all__ = ["CompiledSimulator", "simulator", "instantiate", "run", "CHUNK_S", "H
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
 
-#: :attr:`SimOptions.sampled_method` (resolved) -> the ``stiff`` code of
-#: :func:`rc3r.simulate.engines.compiled.integrate_sampled` (its ``RK4_PERIODS``, ``ROS4_PERIODS``,
-#: ``RODAS_PERIODS``).
-PERIOD_METHODS = {"rk4": 0, "ros4": 1, "rodas": 2, "sdirk": 3}
 
 #: Largest continuous-time step [s]; the stored rows are interpolated inside the steps.
 HMAX = 0.001
