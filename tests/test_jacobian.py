@@ -23,7 +23,7 @@ from rc3r.simulate.engines._jacobian import work
 
 def _setup(controller, eps=None, **kw):
     spec = rc3r.build_run(controller=controller, perturbed=True, eps=eps, duration=1.0, **kw)
-    p = spec.plant
+    p = spec.true_rigid
     eng = simulator(as_plant(p).rigid)
     mod = eng.instance
     n = p.n

@@ -31,7 +31,7 @@ def _outside_loop(spec, loop, nsub):
     """q, u (the delivered torque) and z of ``Controller.step`` driving ``spec.true_plant`` through RK4 with
     ``nsub`` sub-steps per period, the measurement of ``loop`` (its noise, its delay in the controller)."""
     plant, n = spec.true_plant, spec.true_plant.n
-    ctrl = rc3r.Controller(spec.law, spec.robot_model, spec.trajectory, rate=RATE, delay=loop.delay)
+    ctrl = rc3r.Controller(spec.law, spec.controller_model, spec.trajectory, rate=RATE, delay=loop.delay)
     T = 1.0 / RATE
     h = T / nsub
     N = int(round(DURATION * RATE))
@@ -61,7 +61,7 @@ def test_python_engine_compiled_engine_and_controller_step_agree(controller):
     spec = rc3r.build_run(controller=controller, perturbed=True, rate=RATE, duration=DURATION)
     loop = LoopEffects(spec.true_plant.n, noise_q=1e-5, noise_qd=1e-4, delay=1, seed=7)
     runs = {e: simulate(spec.true_plant, spec.law, spec.trajectory, replace(spec.options, engine=e), loop=loop,
-                        model=spec.robot_model) for e in ("python", "fast")}
+                        model=spec.controller_model) for e in ("python", "fast")}
     py, fast = runs["python"], runs["fast"]
     assert py.engine == "python" and fast.engine == "fast"
     assert py.verdict == fast.verdict == "clean" and py.q.shape == fast.q.shape == (301, 3)
@@ -74,5 +74,5 @@ def test_python_engine_compiled_engine_and_controller_step_agree(controller):
     assert py.z.size == 0 or np.abs(fast.z - py.z).max() <= 1e-9
     # the loop effects matter here: without the noise and the delay the run is another one
     plain = simulate(spec.true_plant, spec.law, spec.trajectory, replace(spec.options, engine="python"),
-                     x0=loop.x0(*spec.trajectory.evaluate(0.0)[:2]), model=spec.robot_model)
+                     x0=loop.x0(*spec.trajectory.evaluate(0.0)[:2]), model=spec.controller_model)
     assert np.abs(plain.u - py.u).max() > 1e3 * 1e-10 * np.abs(py.u).max()

@@ -70,10 +70,8 @@ class Controller:
     def from_run(cls, spec) -> "Controller":
         """The controller of a run specification (:func:`rc3r.build_run`): its law, model, trajectory,
         rate and loop delay."""
-        loop = getattr(spec, "loop", None)
-        model = getattr(spec, "robot_model", None) or spec.plant
-        model = getattr(model, "rigid", model)
-        return cls(spec.law, model, spec.trajectory, spec.options.rate, loop.delay if loop is not None else 0)
+        model = spec.controller_model if spec.controller_model is not None else spec.true_rigid
+        return cls(spec.law, model, spec.trajectory, spec.options.rate, 0 if spec.loop is None else spec.loop.delay)
 
     def reset(self) -> None:
         """Back to t = 0: the law's initial state, an empty hold and delay line."""

@@ -371,41 +371,41 @@ class Hardest:
 
     def __init__(self, cfg, spec, sp, rate, delay):
         self.rate, self.delay = float(rate), int(delay)
-        self.search = Search(spec.robot_model, sp, spec.trajectory)
+        self.search = Search(spec.controller_model, sp, spec.trajectory)
         self.kind, self.box, self.ends, self.prefix = "off", None, {}, ""
         f = float(cfg.get("plant", {}).get("urdf_uncertainty", 0.0))
         ubox = None
         if f > 0:
             from ..uncertainty.box import urdf_box
 
-            ubox = urdf_box(spec.robot_model, f)
+            ubox = urdf_box(spec.controller_model, f)
         self.urdf_uncertainty = f
         if cfg.get("payload"):
             from ..plant_sets import _payload, _payload_plant
 
             pay = _payload(cfg["payload"]["mass"], cfg["payload"].get("com"))
             self.kind = "payload"
-            self.ends = {e: _payload_plant(spec.robot_model, pay, e).theta for e in ("lower", "upper")}
+            self.ends = {e: _payload_plant(spec.controller_model, pay, e).theta for e in ("lower", "upper")}
             if ubox is not None:  # the corners of the URDF's uncertainty around the lightest end
                 from ..uncertainty.payload import with_payload
 
-                lower = with_payload(spec.robot_model, pay[0][0], pay[1], label="lower")
+                lower = with_payload(spec.controller_model, pay[0][0], pay[1], label="lower")
                 self.search = Search(lower, sp, spec.trajectory)
                 self.kind, self.box, self.prefix = "payload + URDF uncertainty", ubox, "lower+"
         elif cfg.get("bounds"):  # the identified ellipsoid: its lightest points along the worst directions
             from ..identify.bounds_file import load_bounds
             from ..plant_sets import _bounds_plant
 
-            bf = load_bounds(cfg["bounds"], robot=spec.robot_model)
+            bf = load_bounds(cfg["bounds"], robot=spec.controller_model)
             self.kind = "ellipsoid"
-            self.realise = lambda s: _bounds_plant(spec.robot_model, bf, s)  # the plants a run of the bounds draws
+            self.realise = lambda s: _bounds_plant(spec.controller_model, bf, s)  # the plants a run of the bounds draws
             self.pool = [(f"boundary:{k}", self.search.mass(self.realise(f"boundary:{k}").theta))
                          for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
         else:
             from ..plant_sets import resolve_box
             from ..uncertainty.box import widened
 
-            box = resolve_box(spec.robot_model, cfg.get("box"))
+            box = resolve_box(spec.controller_model, cfg.get("box"))
             self.kind, self.box = "box", box if ubox is None else widened(box, ubox)
             if ubox is not None:
                 self.kind = "box + URDF uncertainty"

@@ -245,9 +245,9 @@ def simulator(rigid) -> CompiledSimulator | None:
 
     Parameters
     ----------
-    rigid : Robot
-        A robot (or any rigid body) with ``compiled_kernels``, ``(module, kc)``
-        (:attr:`rc3r.robots.base.Robot.compiled_kernels`), or None / no such attribute.
+    rigid : rc3r.plants.RigidBody
+        A robot (or any rigid body): its declared ``compiled_kernels``, ``(module, kc)``
+        (:attr:`rc3r.robots.base.Robot.compiled_kernels`), or None.
 
     Returns
     -------
@@ -255,7 +255,7 @@ def simulator(rigid) -> CompiledSimulator | None:
         The one instance for that supply module (the same object for every robot that declares it),
         or None if ``rigid`` declares no compiled kernels (the generic Python engine runs it).
     """
-    declared = getattr(rigid, "compiled_kernels", None)
+    declared = rigid.compiled_kernels
     if declared is None:
         return None
     module = declared[0]

@@ -120,7 +120,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     h = Ts / opt.substeps
     noise = loop.noise(nsamples) if loop is not None else np.zeros((0, 2 * n))
     hold = SampledLoop(law, Ts, loop.delay if loop is not None else 0, z0=x0[2 * n:])
-    advance = getattr(plant.rigid, "advance", None)
+    advance = plant.rigid.advance  # declared: None unless the rigid body integrates itself (MuJoCo)
     check = ready_or_python(S.check)  # interpreted while numba's cache is cold
     for s in range(nsamples + 1):
         t = s * Ts
