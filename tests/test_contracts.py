@@ -172,8 +172,8 @@ def test_mujoco_rigid_body_implements_the_contract():
 
 def test_runspec_fields_and_deprecated_aliases():
     """RunSpec names its robots for what they are; ``plant`` and ``robot_model`` are read-only aliases of
-    ``true_rigid`` and ``controller_model`` that warn (DeprecationWarning), the plant one saying that it is the
-    rigid body without the effects and the loop."""
+    ``true_rigid`` and ``controller_model`` that warn, the plant one (a FutureWarning, shown by default) saying
+    that it is the rigid body without the effects and the loop."""
     import dataclasses
 
     import rc3r
@@ -183,7 +183,7 @@ def test_runspec_fields_and_deprecated_aliases():
     assert isinstance(spec.true_plant, rc3r.Plant) and spec.true_plant.rigid is spec.true_rigid
     assert spec.true_plant.effects and spec.loop is not None
     assert isinstance(spec.controller_model, rc3r.Robot) and spec.controller_model.label == "nominal"
-    with pytest.warns(DeprecationWarning, match="true_rigid.*WITHOUT the plant's effects and loop"):
+    with pytest.warns(FutureWarning, match="true_rigid.*WITHOUT the plant's effects and loop"):  # shown by default
         assert spec.plant is spec.true_rigid
     with pytest.warns(DeprecationWarning, match="controller_model"):
         assert spec.robot_model is spec.controller_model

@@ -64,8 +64,9 @@ class RunSpec:
     could not follow degenerate joint limits), copied into the metrics by :func:`execute`.
 
     ``plant`` and ``robot_model``, the former names of ``true_rigid`` and ``controller_model``, are
-    deprecated read-only aliases (a :class:`DeprecationWarning`). ``spec.plant`` is the rigid body
-    *without* the effects and the loop: ``rc3r.simulate(spec.plant, ...)`` does not simulate the run.
+    deprecated read-only aliases. ``spec.plant`` is the rigid body *without* the effects and the loop
+    (``rc3r.simulate(spec.plant, ...)`` does not simulate the run), so it warns with a
+    :class:`FutureWarning`, which Python shows by default; ``robot_model`` with a :class:`DeprecationWarning`.
     """
 
     name: str
@@ -86,7 +87,8 @@ class RunSpec:
     def plant(self):
         """Deprecated: :attr:`true_rigid` (the true rigid body, without its effects and loop)."""
         _deprecated("plant", "true_rigid (the true rigid body, WITHOUT the plant's effects and loop: simulate "
-                    "spec.true_plant with loop=spec.loop and model=spec.controller_model, or rc3r.execute(spec))")
+                    "spec.true_plant with loop=spec.loop and model=spec.controller_model, or rc3r.execute(spec))",
+                    FutureWarning)  # shown by default: a run simulated on it silently drops the effects
         return self.true_rigid
 
     @property
@@ -96,10 +98,10 @@ class RunSpec:
         return self.controller_model
 
 
-def _deprecated(old: str, new: str) -> None:
+def _deprecated(old: str, new: str, category=DeprecationWarning) -> None:
     import warnings
 
-    warnings.warn(f"RunSpec.{old} is deprecated: use RunSpec.{new}", DeprecationWarning, stacklevel=3)
+    warnings.warn(f"RunSpec.{old} is deprecated: use RunSpec.{new}", category, stacklevel=3)
 
 
 #: Keys a run configuration may hold, per table (docs/control.md).
