@@ -76,3 +76,30 @@ def test_python_engine_compiled_engine_and_controller_step_agree(controller):
     plain = simulate(spec.true_plant, spec.law, spec.trajectory, replace(spec.options, engine="python"),
                      x0=loop.x0(*spec.trajectory.evaluate(0.0)[:2]), model=spec.controller_model)
     assert np.abs(plain.u - py.u).max() > 1e3 * 1e-10 * np.abs(py.u).max()
+
+
+def test_the_loop_holds_delays_and_steps_the_state_by_forward_euler():
+    """SampledLoop alone, on a torque whose command is its sample time and whose zdot is 1: with delay 2 the
+    held command is u_0 at samples 0, 1, 2 and u_{k-2} after; z_k = z_0 + k T (forward Euler, first step at
+    sample 1); Controller.z reads and sets the same state."""
+    from rc3r.controllers.sampled import SampledLoop
+
+    class Law:
+        def initial_state(self):
+            return np.array([1.0])
+
+    T = 0.25
+    loop = SampledLoop(Law(), T, delay=2)
+
+    def torque(t, q, qd, z):
+        return np.array([t]), np.array([1.0]), float(z[0])
+
+    held = [float(loop.sample(k, torque, None, None)[0]) for k in range(6)]
+    assert held == [0.0, 0.0, 0.0, T, 2 * T, 3 * T]
+    assert loop.z.tolist() == [1.0 + 5 * T] and loop.diagnostic == 1.0 + 5 * T and loop.command.tolist() == [5 * T]
+    loop.reset()
+    assert loop.k == -1 and loop.u is None and loop.z.tolist() == [1.0]
+    spec = rc3r.build_run(controller="adaptive", rate=RATE, duration=0.01)
+    ctrl = rc3r.Controller.from_run(spec)
+    ctrl.z = np.full(ctrl.z.size, 2.0)
+    assert ctrl._loop.z.tolist() == [2.0] * spec.law.p

@@ -81,8 +81,13 @@ class Controller:
 
     @property
     def z(self) -> np.ndarray:
-        """The law's state (the adaptive estimate), as of the last sample (or call, continuous)."""
+        """The law's state (the adaptive estimate), as of the last sample (or call, continuous); settable (a
+        warm start), as before it lived in the shared loop."""
         return self._loop.z
+
+    @z.setter
+    def z(self, value) -> None:
+        self._loop.z = np.array(value, dtype=float)
 
     @property
     def diagnostic(self) -> float:
