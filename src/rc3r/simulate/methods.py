@@ -7,6 +7,10 @@ imports its codes from here, so the two cannot part).
 * sampled time, how the plant is advanced over a period
   (:attr:`~rc3r.simulate.SimOptions.sampled_method`): :data:`PERIOD_METHODS`, codes of
   :func:`~rc3r.simulate.engines.compiled.integrate_sampled` (its ``stiff`` argument).
+
+numba freezes these codes into the compiled integrators' machine code; this module mentions numba so
+that :func:`rc3r._numba_cache.package_hash` covers it (an edited code recompiles, never a stale cache:
+``tests/test_numba_cache.py``).
 """
 from __future__ import annotations
 
