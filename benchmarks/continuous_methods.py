@@ -33,7 +33,7 @@ def main() -> None:
     from rc3r.plants import as_plant
     from rc3r.simulate import _initial_state, continuous_method, simulate
     from rc3r.simulate._fast import simulator
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=10.0)
@@ -46,7 +46,7 @@ def main() -> None:
         for arm in args.arms.split(","):
             spec = build_run(robot=arm, payload=(0.0, 3.0), controller="robust", duration=args.duration)
             for method in ("ode23s", "rodas"):
-                r = simulate(spec.plant, spec.law, spec.trajectory, replace(spec.options, method=method))
+                r = simulate(spec.true_rigid, spec.law, spec.trajectory, replace(spec.options, method=method))
                 print(f"{arm:8s} robust, 0-3 kg, {args.duration:g} s continuous, {method:6s} {r.engine:6s} {r.verdict:8s} "
                       f"steps {r.steps:7d} rhs {r.rhs_evals:8d} wall {r.wall_time_s:6.2f} s max|e| {np.abs(r.e).max():.4g} rad",
                       flush=True)
@@ -62,10 +62,10 @@ def main() -> None:
         if args.rtol is not None:
             opts = replace(opts, rtol=args.rtol, atol=args.atol if args.atol is not None else opts.atol)
         name = f"{law}{'' if eps is None else f'-eps{eps:g}'}-{'perturbed' if pert else 'ideal'}"
-        ref = simulate(spec.plant, spec.law, spec.trajectory,
+        ref = simulate(spec.true_rigid, spec.law, spec.trajectory,
                        replace(opts, method="ros4", jac_reuse=1, rtol=1e-10, atol=1e-12, max_steps=1e8))
         umax = np.abs(ref.u).max()
-        p = spec.plant
+        p = spec.true_rigid
         x0 = _initial_state(p.n, spec.law, spec.trajectory, None)
         rhs = simulator(p).instance.closed_loop_xdot
         rargs = (simulator(p).constants(p), as_plant(p).pack(), int(spec.law.code), spec.law.pack(p.n),
@@ -75,7 +75,7 @@ def main() -> None:
         chosen = continuous_method(spec.law, opts).method
         for method, jr in METHODS:
             o = replace(opts, method=method, jac_reuse=jr)
-            runs = [simulate(spec.plant, spec.law, spec.trajectory, o) for _ in range(args.repeats)]
+            runs = [simulate(spec.true_rigid, spec.law, spec.trajectory, o) for _ in range(args.repeats)]
             r = min(runs, key=lambda x: x.wall_time_s)
             m = min(len(r.t), len(ref.t))
             dq = np.abs(r.q[:m] - ref.q[:m]).max()

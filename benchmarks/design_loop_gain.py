@@ -29,7 +29,7 @@ def main(design_path: str, bounds_path: str) -> None:
     rate = float(cfg["simulation"]["rate"])
     spec, rho_i = _resolve(cfg, rate)
     hard = Hardest(cfg, spec, controller_model_spectrum(spec), rate, 0)
-    m_other = hard.search.mass(load_bounds(bounds_path, robot=spec.robot_model)["theta0"])
+    m_other = hard.search.mass(load_bounds(bounds_path, robot=spec.controller_model)["theta0"])
     gains = {}
     for law in ("robust", "robust-coeff"):
         g = dict(cfg["gains"][law])
@@ -46,7 +46,7 @@ def main(design_path: str, bounds_path: str) -> None:
         return
     from rc3r.plant_sets import _payload, _payload_plant
 
-    lower = _payload_plant(spec.robot_model, _payload(cfg["payload"]["mass"], cfg["payload"].get("com")), "lower")
+    lower = _payload_plant(spec.controller_model, _payload(cfg["payload"]["mass"], cfg["payload"].get("com")), "lower")
     pi0 = lower.standard_parameters().copy()
     for s in (0.5, 0.3, 0.2, 0.1):
         worst = 0.0

@@ -35,7 +35,7 @@ def _run(spec):
     import rc3r
 
     cpu = time.process_time()
-    res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    res = rc3r.simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
     return res, time.process_time() - cpu
 
 
@@ -71,7 +71,7 @@ def main(argv=None) -> int:
     res = rows["compiled"][0]
     idx = np.linspace(0, res.t.size - 1, min(res.t.size, 20000)).astype(int)
     qdd = np.gradient(res.qd, res.t, axis=0)
-    rnea_wall, rnea_cpu = _rnea_us(_spec(a.duration, "compiled").plant.model, res.q[idx], res.qd[idx], qdd[idx])
+    rnea_wall, rnea_cpu = _rnea_us(_spec(a.duration, "compiled").true_rigid.model, res.q[idx], res.qd[idx], qdd[idx])
     steps = round(a.duration * 1000.0)
     print(f"pin.rnea: {rnea_wall:.2f} us wall, {rnea_cpu:.2f} us cpu per call")
     print(f"{'engine':>8} {'wall [s]':>9} {'cpu [s]':>8} {'us/step (cpu)':>14} {'rnea/step (cpu)':>16} "

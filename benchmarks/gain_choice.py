@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rc3r.study import build_run, execute
+from rc3r.runspec import build_run, execute
 
 
 def main() -> None:

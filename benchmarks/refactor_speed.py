@@ -31,7 +31,7 @@ _NEW = r"""
 import sys, json, time, numpy as np
 from rc3r.experiments.paper3r import scenarios
 from rc3r.robots.rr3 import kernels as K
-from rc3r.study import execute as run
+from rc3r.runspec import execute as run
 specs = scenarios()
 """
 _BODY = r"""

@@ -23,11 +23,11 @@ def main() -> None:
     from rc3r.plants import as_plant
     from rc3r.simulate import _initial_state, simulate
     from rc3r.simulate._fast import simulator
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
     from rc3r.trajectory import reference_into
 
     spec = build_run(controller="robust", perturbed=True, duration=10.0)
-    p = spec.plant
+    p = spec.true_rigid
     eng = simulator(p)
     mod = eng.instance
     cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
@@ -126,19 +126,19 @@ def main() -> None:
         best = min(_timed(f, N, args) for _ in range(3))
         print(f"  {name:24s} {best / N * 1e9:7.1f} ns")
     opts = replace(spec.options, engine="fast")
-    simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01, method="ros4"))
-    simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01))
+    simulate(spec.true_rigid, spec.law, spec.trajectory, replace(opts, duration=0.01, method="ros4"))
+    simulate(spec.true_rigid, spec.law, spec.trajectory, replace(opts, duration=0.01))
     print("\n10 s robust-perturbed, rtol 1e-6, atol 1e-8 (best of 3 walls):")
     print(f"  {'method':8s} {'J kept':>6s} {'steps':>7s} {'rejected':>8s} {'rhs':>7s} {'rhs/step':>8s} {'wall':>8s}")
     for method, jr in (("ode23s", 1), ("ode23s", 5), ("ros4", 1), ("ros4", 5), ("rodas", 1)):
-        runs = [simulate(spec.plant, spec.law, spec.trajectory, replace(opts, method=method, jac_reuse=jr))
+        runs = [simulate(spec.true_rigid, spec.law, spec.trajectory, replace(opts, method=method, jac_reuse=jr))
                 for _ in range(3)]
         r = min(runs, key=lambda x: x.wall_time_s)
         tries = r.steps + r.rejected_steps
         print(f"  {method:8s} {jr:6d} {r.steps:7d} {r.rejected_steps:8d} {r.rhs_evals:7d} "
               f"{r.rhs_evals / tries:8.2f} {r.wall_time_s * 1e3:6.0f} ms")
     reps = 9
-    walls = sorted(simulate(spec.plant, spec.law, spec.trajectory, opts).wall_time_s * 1e3 for _ in range(reps))
+    walls = sorted(simulate(spec.true_rigid, spec.law, spec.trajectory, opts).wall_time_s * 1e3 for _ in range(reps))
     print(f"\nthe default (auto: rodas), simulate() {reps} times: walls {', '.join(f'{w:.0f}' for w in walls)} ms; "
           f"median {walls[reps // 2]:.0f} ms")
     from rc3r.simulate import _limits

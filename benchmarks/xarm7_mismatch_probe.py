@@ -32,7 +32,7 @@ def main(argv=None) -> int:
             for plant in ("lower", "mass:0.75", "mass:1.5", "upper"):
                 spec = rc3r.build_run(urdf=urdf, controller=ctl, rate=rate, duration=args.duration,
                                       payload=(0.0, 3.0), plant=plant)
-                res = rc3r.simulate(spec.true_plant or spec.plant, spec.law, spec.trajectory, spec.options)
+                res = rc3r.simulate(spec.true_plant or spec.true_rigid, spec.law, spec.trajectory, spec.options)
                 err = f"{float(np.abs(res.e).max()):.3g}" if res.ok else "-"
                 eps = getattr(spec.law, "eps", None)
                 print(f"{ctl:6s} {rate:g} Hz  {plant:10s} {res.verdict:14s} max|e| {err:>9s} rad  "

@@ -52,12 +52,12 @@ def main(box_path: str | None = None, duration: float = 5.0, plant: str = "rando
                           config=config)
     res, m = rc3r.execute(spec)
     res.raise_for_status()
-    inside = covers(spec.law, spec.plant.theta)
-    m_lo, m_hi = inertia_range(spec.plant, res.q)  # the plant's M(q) over the whole motion
-    bound = error_bound(spec.law, m_lo, m_hi, spec.plant.n)
+    inside = covers(spec.law, spec.true_rigid.theta)
+    m_lo, m_hi = inertia_range(spec.true_rigid, res.q)  # the plant's M(q) over the whole motion
+    bound = error_bound(spec.law, m_lo, m_hi, spec.true_rigid.n)
     err = np.array(m["max_abs_error"])
-    print(f"robust law on plant '{spec.plant.label}' (||theta - theta_0|| = "
-          f"{np.linalg.norm(spec.plant.theta - spec.law.theta):.4g} <= rho = {spec.law.rho:.6g}: {inside}), "
+    print(f"robust law on plant '{spec.true_rigid.label}' (||theta - theta_0|| = "
+          f"{np.linalg.norm(spec.true_rigid.theta - spec.law.theta):.4g} <= rho = {spec.law.rho:.6g}: {inside}), "
           f"{duration:g} s: {res.verdict if res.ok else res.message}")
     print(f"max|e|          = {' '.join(f'{x:.3g}' for x in err)} rad")
     print(f"predicted bound = {' '.join(f'{x:.3g}' for x in bound)} rad (Spong's UUB, M eigenvalues in "

@@ -72,7 +72,7 @@ def main(duration: float = 2.0) -> dict:
     }
     out = {}
     for label, (ctrl, why) in runs.items():
-        res = rc3r.simulate(fair.plant, ctrl, fair.trajectory, opts)
+        res = rc3r.simulate(fair.true_rigid, ctrl, fair.trajectory, opts)
         err, chat = float(np.abs(res.e).max()), max(run_metrics(res)["chattering"])
         out[label] = err
         print(f"{label:>34} on '{res.plant}' ({res.engine} engine, {res.mode} {res.options.rate:g} Hz, "

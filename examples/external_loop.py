@@ -41,11 +41,11 @@ def pinocchio_plant(robot):
 def external_run(spec, engine: str):
     """Joint positions (N, n) of the external loop at the controller's samples."""
     ctrl = rc3r.Controller.from_run(spec)
-    rigid = getattr(spec.plant, "rigid", spec.plant)
+    rigid = spec.true_rigid
     if engine == "mujoco":
         from rc3r.plants.mujoco import MujocoRigidBody
 
-        advance = MujocoRigidBody.from_urdf(rigid.urdf, locked=getattr(rigid, "locked", None) or None).advance
+        advance = MujocoRigidBody.from_urdf(rigid.urdf, locked=rigid.locked or None).advance
     else:
         advance = pinocchio_plant(rigid)
     T = 1.0 / spec.options.rate

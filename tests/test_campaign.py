@@ -163,11 +163,11 @@ def test_montecarlo_writes_table_summary_and_figures(tmp_path):
     # the paper's claim, plant by plant: robust << FBL on every perturbed plant of the box
     assert all(r["max_error"] < 0.1 * fbl[r["plant"]]["max_error"] for r in robust)
     # the distance recorded is ||theta - theta_0|| of the plant of that seed
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
 
     spec = build_run(controller="robust", perturbed=True, plant=f"random:{robust[0]['plant_seed']}")
     th0 = np.array(spec.model["theta0"])
-    assert robust[0]["theta_dist"] == pytest.approx(np.linalg.norm(spec.plant.theta - th0), rel=1e-12)
+    assert robust[0]["theta_dist"] == pytest.approx(np.linalg.norm(spec.true_rigid.theta - th0), rel=1e-12)
 
 
 def test_cdf_figure_plots_the_rows():
@@ -186,7 +186,7 @@ def test_exceeds_bound_is_max_error_above_the_predicted_bound(tmp_path):
     """The columns behind docs/robustness.md's "0 of N": exceeds_bound recomputed from each row,
     and the summary's count from the rows. The paper's Lambda is the same on every joint, so
     the per-joint bound is one number (checked) and any(e_j > bound_j) = max_error > predicted_bound."""
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
 
     law = build_run(controller="robust", perturbed=True).law
     b = error_bound(law, 1.0, 2.0, 3)
@@ -222,7 +222,7 @@ def test_a_run_above_a_tiny_predicted_bound_is_counted(tmp_path, monkeypatch):
 def test_montecarlo_rows_record_the_configs_sampled_rate(tmp_path):
     """A config with [simulation] rate = 1000 and no --rate: the runs are sampled at 1 kHz and
     every row and job id says so (they said 'continuous' with an empty rate)."""
-    from rc3r.study import build_run, execute
+    from rc3r.runspec import build_run, execute
 
     cfg = tmp_path / "c.toml"
     cfg.write_text("[simulation]\nrate = 1000\n")

@@ -307,7 +307,7 @@ def test_a_row_by_hand(tmp_path):
     spec = job.build()
     assert set(row) == set(columns(3)) and row["job"] == job.id == "nominal/robust/eps=default/continuous"
     assert row["eps"] == 0.5 and row["rate_hz"] is None and row["status"] == "ok" and row["plant_seed"] is None
-    assert row["theta_dist"] == pytest.approx(np.linalg.norm(spec.plant.theta - np.asarray(spec.model["theta0"])),
+    assert row["theta_dist"] == pytest.approx(np.linalg.norm(spec.true_rigid.theta - np.asarray(spec.model["theta0"])),
                                               rel=1e-12)
     e = [row[f"e_max_{j}"] for j in (1, 2, 3)]
     assert row["max_error"] == max(e) and row["max_torque"] == max(row[f"u_max_{j}"] for j in (1, 2, 3))

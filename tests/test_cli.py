@@ -87,7 +87,7 @@ def test_bounds_and_design_lock_a_gripper_whose_link_has_its_name(capsys):
     import json
 
     from rc3r.design.verify import design_config
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
 
     so100 = _erd("so_arm_description/urdf/so100.urdf")
     assert main(["bounds", "--urdf", so100, "--lock", "gripper=0", "--payload", "0:1", "--json"]) == EXIT["ok"]
@@ -95,7 +95,7 @@ def test_bounds_and_design_lock_a_gripper_whose_link_has_its_name(capsys):
     assert out["nominal"]["n"] == 5 and out["nominal"]["locked"] == {"gripper": 0.0} and out["rho"] > 0
     cfg = design_config({}, urdf=so100, lock=[("gripper", 0.0)], payload=(0.0, 1.0))
     spec = build_run(controller="robust", config=cfg, rate=500.0, eps=1.0)
-    assert spec.plant.n == 5 and spec.robot_model.locked == {"gripper": 0.0}
+    assert spec.true_rigid.n == 5 and spec.controller_model.locked == {"gripper": 0.0}
 
 
 def test_urdf_takes_a_portable_example_robot_data_name(capsys):

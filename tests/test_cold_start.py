@@ -73,26 +73,26 @@ def cold(monkeypatch):
 @pytest.mark.parametrize("robot", ["ur5", "rr3"])
 def test_short_sampled_run_passes_a_cold_engine_over(cold, robot):
     spec = rc3r.build_run(robot=robot, controller="fbl", rate=1000.0, duration=1.0)
-    name, why = planned_engine(spec.plant, spec.law, spec.options)
+    name, why = planned_engine(spec.true_rigid, spec.law, spec.options)
     assert name == "python" and "not built yet" in why
 
 
 def test_limit_of_the_cold_rule(cold):
     """At the limit (COLD_MAX_SUBSTEPS sub-steps, one per 1 ms period) python; one period more, fast."""
     at = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=COLD_MAX_SUBSTEPS / 1000.0)
-    assert planned_engine(at.plant, at.law, at.options)[0] == "python"
+    assert planned_engine(at.true_rigid, at.law, at.options)[0] == "python"
     past = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=COLD_MAX_SUBSTEPS / 1000.0 + 0.001)
-    assert planned_engine(past.plant, past.law, past.options) == ("fast", None)
+    assert planned_engine(past.true_rigid, past.law, past.options) == ("fast", None)
 
 
 def test_continuous_named_and_compile_policy_runs_compile(cold, monkeypatch):
     cont = rc3r.build_run(robot="rr3", controller="robust", perturbed=True, duration=1.0)
-    assert planned_engine(cont.plant, cont.law, cont.options) == ("fast", None)
+    assert planned_engine(cont.true_rigid, cont.law, cont.options) == ("fast", None)
     named = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=1.0, engine="fast")
-    assert planned_engine(named.plant, named.law, named.options) == ("fast", None)
+    assert planned_engine(named.true_rigid, named.law, named.options) == ("fast", None)
     monkeypatch.setenv("RC3R_COLD_START", "compile")
     short = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=1.0)
-    assert planned_engine(short.plant, short.law, short.options) == ("fast", None)
+    assert planned_engine(short.true_rigid, short.law, short.options) == ("fast", None)
 
 
 def test_cold_python_run_equals_the_compiled_one(cold):
@@ -101,13 +101,13 @@ def test_cold_python_run_equals_the_compiled_one(cold):
     (tests/test_simulate.py: 6.5e-13 rad over 2 s on the UR5); 1e-9 rad leaves room for 0.5 s."""
     spec = rc3r.build_run(robot="ur5", controller="robust", payload=(0.0, 3.0), perturbed=True, rate=1000.0,
                           duration=0.5)
-    res_py = rc3r.simulate(spec.true_plant or spec.plant, spec.law, spec.trajectory, spec.options,
-                           loop=spec.loop, model=spec.robot_model)
+    res_py = rc3r.simulate(spec.true_plant or spec.true_rigid, spec.law, spec.trajectory, spec.options,
+                           loop=spec.loop, model=spec.controller_model)
     assert res_py.engine == "python"
     from dataclasses import replace
 
-    res_fast = rc3r.simulate(spec.true_plant or spec.plant, spec.law, spec.trajectory,
-                             replace(spec.options, engine="fast"), loop=spec.loop, model=spec.robot_model)
+    res_fast = rc3r.simulate(spec.true_plant or spec.true_rigid, spec.law, spec.trajectory,
+                             replace(spec.options, engine="fast"), loop=spec.loop, model=spec.controller_model)
     assert res_fast.engine == "fast" and res_py.outcome == res_fast.outcome == "finished"
     assert np.max(np.abs(res_py.q - res_fast.q)) < 1e-9
 
@@ -117,8 +117,8 @@ def test_prepare_builds_a_cold_integrator_and_leaves_a_warm_one(monkeypatch):
     spec = rc3r.build_run(robot="rr3", controller="fbl", rate=1000.0, duration=1.0)
     from dataclasses import replace
 
-    rc3r.simulate(spec.plant, spec.law, spec.trajectory, replace(spec.options, engine="fast"))  # now warm
-    assert planned_engine(spec.plant, spec.law, spec.options) == ("fast", None)
+    rc3r.simulate(spec.true_rigid, spec.law, spec.trajectory, replace(spec.options, engine="fast"))  # now warm
+    assert planned_engine(spec.true_rigid, spec.law, spec.options) == ("fast", None)
     assert prepare(spec) is False  # warm: nothing to do
     calls = []
     monkeypatch.setattr(CompiledSimulator, "is_cached", lambda self, which=None: bool(calls))
@@ -152,7 +152,7 @@ def test_fresh_process_with_an_empty_cache_compiles_nothing(tmp_path):
     compiled = list((tmp_path / "numba").rglob("*.nbc")) if (tmp_path / "numba").exists() else []
     assert compiled == []
     spec = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=0.2, engine="fast")
-    res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    res = rc3r.simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
     e_fast = np.max(np.abs(res.e), axis=0)
     np.testing.assert_allclose(m["max_abs_error"], e_fast, rtol=1e-6, atol=1e-12)
 

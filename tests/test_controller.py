@@ -47,8 +47,8 @@ def test_delay_and_hold_match_the_simulator():
     """Controller(delay=2) called every 0.25 ms (4 calls per 1 ms sample) holds u_{k-2} like the
     simulator's delay line: its torques at the sample times equal simulate(..., loop=delay 2)."""
     spec = rc3r.build_run(controller="fbl", perturbed=True, rate=1000.0, duration=0.02)
-    res = simulate(spec.plant, spec.law, spec.trajectory, spec.options, loop=LoopEffects(3, delay=2))
-    ctrl = rc3r.Controller(spec.law, spec.plant, spec.trajectory, rate=1000.0, delay=2)
+    res = simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options, loop=LoopEffects(3, delay=2))
+    ctrl = rc3r.Controller(spec.law, spec.true_rigid, spec.trajectory, rate=1000.0, delay=2)
     for k in range(len(res.t) - 1):
         for sub in range(4):
             t = k * 1e-3 + sub * 2.5e-4
@@ -68,7 +68,7 @@ def test_bad_calls():
     with pytest.raises(ParameterError, match="q and qd"):
         ctrl.step(0.003, q[:2], qd)
     with pytest.raises(ParameterError, match="needs a sampled controller"):
-        rc3r.Controller(spec.law, spec.plant, spec.trajectory, rate=None, delay=1)
+        rc3r.Controller(spec.law, spec.true_rigid, spec.trajectory, rate=None, delay=1)
 
 
 @pytest.mark.parametrize("where, bad, words", [
@@ -88,7 +88,7 @@ def test_non_finite_or_non_numeric_arguments_raise_parameter_error(where, bad, w
     (main: silently NaN) and never leaks numpy's or Python's ValueError/OverflowError -- sampled or
     continuous; and the controller still works afterwards with good arguments."""
     spec = rc3r.build_run(controller="fbl", rate=1000.0, duration=0.01)
-    ctrl = rc3r.Controller(spec.law, spec.plant, spec.trajectory, rate=rate)
+    ctrl = rc3r.Controller(spec.law, spec.true_rigid, spec.trajectory, rate=rate)
     q, qd, _ = spec.trajectory.evaluate(0.0)
     args = {"t": 0.001, "q": q.copy(), "qd": qd.copy()}
     if where == "t" or isinstance(bad, (str, list)):

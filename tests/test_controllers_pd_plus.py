@@ -56,8 +56,8 @@ def test_torque_equals_pinocchio_feedforward_plus_pd_by_hand(robot, rng):
 
 def _run(engine, perturbed=True, **kw):
     spec = rc3r.build_run(controller="pd-plus", perturbed=perturbed, duration=1.0, engine=engine, **kw)
-    return rc3r.simulate(spec.true_plant or spec.plant, spec.law, spec.trajectory, spec.options,
-                         loop=spec.loop, model=spec.robot_model)
+    return rc3r.simulate(spec.true_plant or spec.true_rigid, spec.law, spec.trajectory, spec.options,
+                         loop=spec.loop, model=spec.controller_model)
 
 
 @pytest.mark.slow

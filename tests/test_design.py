@@ -134,7 +134,7 @@ def test_default_ur5_robust_at_1khz_is_clean_where_the_old_defaults_diverged():
     assert "sampled-data rule" in new.model["gains_source"]
     assert new.law.eps > 0.5 and new.law.K_inertia == pytest.approx(50.0)  # K(q) = (rate / 20) M(q)
     # the rule rejects the old gains and accepts its own (the check the hook applies)
-    sp = spectrum(new.robot_model, new.trajectory, 1.5)
+    sp = spectrum(new.controller_model, new.trajectory, 1.5)
     assert check(old.law, sp, 1000.0) > 1.0 >= check(new.law, sp, 1000.0) - 1e-12
 
 
@@ -154,7 +154,7 @@ def test_default_robust_on_the_xarm7_with_a_payload_is_clean(rate):
     assert DEFAULT_MARGIN == 2.0 and "sampled-data rule" in spec.model["gains_source"]
     assert res.ok and m["verdict"] == "clean", m["verdict"]
     thin = rc3r.build_run(**kw, config={"gains": {"robust": dict(sampled_gains(
-        "robust", spec.robot_model, spec.trajectory, spec.model, rate, duration=3.0, margin=1.0)[0])}})
+        "robust", spec.controller_model, spec.trajectory, spec.model, rate, duration=3.0, margin=1.0)[0])}})
     assert thin.law.eps < 0.7 * spec.law.eps
     assert rc3r.execute(thin)[1]["verdict"] == "diverged"
 
@@ -179,7 +179,7 @@ def test_fbl_defaults_pass_the_rule_and_stay():
     spec = rc3r.build_run(**{**UR5_PAYLOAD, "controller": "fbl"}, duration=0.1)
     assert spec.law.Kp == pytest.approx(100.0) and spec.law.Kd == pytest.approx(100.0)
     assert spec.model["gains_source"].startswith("default gains")
-    gains, note = sampled_gains("robust-ellipsoid", spec.robot_model, spec.trajectory, spec.model, 1000.0)
+    gains, note = sampled_gains("robust-ellipsoid", spec.controller_model, spec.trajectory, spec.model, 1000.0)
     assert gains is None and note is None
 
 
@@ -275,12 +275,12 @@ def test_bad_design_input_is_one_line_and_writes_nothing(tmp_path, capsys, argv,
 # ---- the campaign's robot cache and the design benchmark's table --------------------------------------
 
 def test_a_urdf_arm_is_read_once_per_process_and_again_when_its_file_changes(tmp_path):
-    """build_run reads a URDF arm once per file and lock in a process (rc3r.study._urdf_robot_cached: a design's
+    """build_run reads a URDF arm once per file and lock in a process (rc3r.runspec._urdf_robot_cached: a design's
     or a Monte Carlo's jobs all rebuild the same arm); the same file gives the same robot, another lock or an
     edited file a new one, and the runs built from the cached robot equal those from a fresh read."""
     import shutil
 
-    import rc3r.study as study
+    import rc3r.runspec as study
     from rc3r.robots.pinocchio import PinocchioRobot, example_robot_data_dir
 
     src = example_robot_data_dir() / "double_pendulum_description/urdf/double_pendulum.urdf"
@@ -291,7 +291,7 @@ def test_a_urdf_arm_is_read_once_per_process_and_again_when_its_file_changes(tmp
     fresh = PinocchioRobot.from_urdf(path)
     np.testing.assert_array_equal(a.theta, fresh.theta)
     spec = rc3r.build_run(urdf=str(path), controller="fbl", duration=0.05, rate=1000.0)
-    assert spec.robot_model is a
+    assert spec.controller_model is a
     path.write_text(path.read_text() + "\n<!-- edited -->\n")  # size changes: read again
     assert study._nominal(None, urdf=str(path)) is not a
 
@@ -408,7 +408,7 @@ def test_design_toml_names_packaged_urdfs_by_name_and_user_files_relative_to_its
     from rc3r.design.verify import design_config
     from rc3r.robots.pinocchio import example_robot_data_dir
     from rc3r.io import read_config
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
 
     ur3 = example_robot_data_dir() / "ur_description/urdf/ur3_robot.urdf"
     project = tmp_path / "project"
@@ -426,8 +426,8 @@ def test_design_toml_names_packaged_urdfs_by_name_and_user_files_relative_to_its
     for sub, want in (("erd", ur3), ("own", moved / "arm.urdf")):
         cfg = read_config(moved / "designs" / sub / "design.toml")
         spec = build_run(controller="robust", config=cfg, rate=1000.0)
-        assert spec.robot_model.n == 6 and spec.robot_model.robot_name == "ur3"
-        assert spec.robot_model.urdf == str(want.resolve())
+        assert spec.controller_model.n == 6 and spec.controller_model.robot_name == "ur3"
+        assert spec.controller_model.urdf == str(want.resolve())
 
 
 def test_old_design_tomls_with_absolute_paths_still_load(tmp_path, monkeypatch):
@@ -436,7 +436,7 @@ def test_old_design_tomls_with_absolute_paths_still_load(tmp_path, monkeypatch):
     is kept."""
     from rc3r.robots.pinocchio import example_robot_data_dir
     from rc3r.io import read_config, resolve_config_paths
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
 
     ur3 = example_robot_data_dir() / "ur_description/urdf/ur3_robot.urdf"
     old = tmp_path / "design.toml"
@@ -444,7 +444,7 @@ def test_old_design_tomls_with_absolute_paths_still_load(tmp_path, monkeypatch):
                    "[gains.robust]\nK = [5.0, 5.0, 5.0, 5.0, 5.0, 5.0]\nLambda = 10.0\neps = 1.0\n"
                    "[simulation]\nrate = 1000.0\n")
     spec = build_run(controller="robust", config=read_config(old))
-    assert spec.robot_model.urdf == str(ur3) and spec.robot_model.n == 6
+    assert spec.controller_model.urdf == str(ur3) and spec.controller_model.n == 6
     (tmp_path / "cwd").mkdir()
     (tmp_path / "cwd" / "legacy.toml").write_text("")
     monkeypatch.chdir(tmp_path / "cwd")

@@ -43,14 +43,14 @@ def test_theta_model_is_the_robots_mass_matrix_and_linear_in_theta(robot):
 def test_the_rule_uses_theta_0s_mass_matrix_not_the_urdfs(monkeypatch):
     """On the 3R with the paper's box, theta_0 = (nominal + p_up) / 2 is about 8 times heavier than the
     nominal arm in its lightest direction: the spectrum verify_design hands the rule (m_min, L_Y) is
-    theta_0's. Fails if verify_design samples spec.robot_model (the URDF arm) again."""
+    theta_0's. Fails if verify_design samples spec.controller_model (the URDF arm) again."""
     import rc3r.design.verify as verify
     from rc3r.design.rule import ThetaModel, spectrum
 
     cfg = verify.design_config({}, robot="rr3", duration=0.2)
     spec = rc3r.build_run(controller="robust", config=cfg, rate=1000.0, eps=1.0)
-    own = spectrum(ThetaModel(spec.robot_model, spec.model["theta0"]), spec.trajectory, 0.2)
-    urdf = spectrum(spec.robot_model, spec.trajectory, 0.2)
+    own = spectrum(ThetaModel(spec.controller_model, spec.model["theta0"]), spec.trajectory, 0.2)
+    urdf = spectrum(spec.controller_model, spec.trajectory, 0.2)
     assert own.m_min > 5 * urdf.m_min  # the two models differ: the test can tell them apart
     seen = {}
 
@@ -79,7 +79,7 @@ def _planted(tmp_path):
     spec, rho_i = _resolve(cfg, 1000.0)
     sp = spectrum(controller_model(spec), spec.trajectory, 1.0)
     return cfg, spec, sp, fast_design(sp, 1000.0, rho=spec.model["rho"], rho_i=rho_i), Search(
-        spec.robot_model, sp, spec.trajectory)
+        spec.controller_model, sp, spec.trajectory)
 
 
 def test_search_finds_a_corner_harder_than_every_random_draw(tmp_path):
@@ -89,19 +89,19 @@ def test_search_finds_a_corner_harder_than_every_random_draw(tmp_path):
     realised plant's own theta)."""
     from rc3r.campaign.jobs import plant_seed
     from rc3r.design.worst import loop_gains, plant_gain, search_box
-    from rc3r.study import resolve_box
+    from rc3r.runspec import resolve_box
     from rc3r.uncertainty.box import perturb
 
     cfg, spec, sp, d, S = _planted(tmp_path)
-    box = resolve_box(spec.robot_model, cfg["box"])
+    box = resolve_box(spec.controller_model, cfg["box"])
     G = loop_gains(S, d.gains("robust"), rho=spec.model["rho"], eps=3.0 * d.eps_stable)
-    rand = [float(np.max(plant_gain(G, S.mass(perturb(spec.robot_model, box, f"random:{plant_seed(0, k)}",
+    rand = [float(np.max(plant_gain(G, S.mass(perturb(spec.controller_model, box, f"random:{plant_seed(0, k)}",
                                                                simulable=True).theta))[0])) / 1000.0
             for k in range(30)]
     found = search_box(S, box, G, 1000.0)
     top = found[0]
     assert max(rand) < 2.0 < top["T_lambda"]
-    plant = perturb(spec.robot_model, box, top["spec"], simulable=True)
+    plant = perturb(spec.controller_model, box, top["spec"], simulable=True)
     assert float(np.max(plant_gain(G, S.mass(plant.theta))[0])) / 1000.0 == pytest.approx(top["T_lambda"])
     assert top["T_lambda"] > 1.3 * max(rand)
 
@@ -257,12 +257,12 @@ def test_payload_plants_with_urdf_uncertainty_are_drawn_in_the_set_and_the_searc
 
     cfg = design_config({}, robot="ur5", payload=(0.0, 3.0), duration=1.0)
     spec, rho_i = _resolve(cfg, 1000.0)
-    urdf = spec.robot_model.standard_parameters()
+    urdf = spec.controller_model.standard_parameters()
     lo, hi = ranges(cfg["plant"]["urdf_uncertainty"], 6)
     for f in (cfg["plant"]["urdf_uncertainty"], "off"):
         c = json.loads(json.dumps(cfg))
         c["plant"]["urdf_uncertainty"] = f
-        p = rc3r.build_run(controller="robust", config=c, plant="random:5", rate=1000.0, eps=1.0).plant
+        p = rc3r.build_run(controller="robust", config=c, plant="random:5", rate=1000.0, eps=1.0).true_rigid
         mass = float(np.random.default_rng(5).uniform(0.0, 3.0))
         arm = p.standard_parameters().copy()
         arm[-10:] -= payload_parameters(mass, np.zeros(3), None)
@@ -279,8 +279,8 @@ def test_payload_plants_with_urdf_uncertainty_are_drawn_in_the_set_and_the_searc
     top = found[0]
     assert top["spec"] == "lower+urdf-lower"
     G = hard.gains(sl, rho=spec.model["rho"], eps=d.eps)
-    light = rc3r.build_run(controller="robust", config=cfg, plant="lower", rate=1000.0, eps=1.0).plant
-    plant = rc3r.build_run(controller="robust", config=cfg, plant=top["spec"], rate=1000.0, eps=1.0).plant
+    light = rc3r.build_run(controller="robust", config=cfg, plant="lower", rate=1000.0, eps=1.0).true_rigid
+    plant = rc3r.build_run(controller="robust", config=cfg, plant=top["spec"], rate=1000.0, eps=1.0).true_rigid
     gain = float(np.max(plant_gain(G, hard.search.mass(plant.theta))[0])) / 1000.0
     assert gain == pytest.approx(top["T_lambda"], rel=1e-6)
     assert gain > 1.05 * float(np.max(plant_gain(G, hard.search.mass(light.theta))[0])) / 1000.0

@@ -25,7 +25,7 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 #: Modules of the module map that the API reference must document (automodule with members).
 MAIN_MODULES = ("rc3r.robots", "rc3r.robots.base", "rc3r.controllers", "rc3r.trajectory", "rc3r.uncertainty.box",
-                "rc3r.uncertainty.bounds", "rc3r.simulate", "rc3r.study", "rc3r.campaign.jobs",
+                "rc3r.uncertainty.bounds", "rc3r.simulate", "rc3r.runspec", "rc3r.campaign.jobs",
                 "rc3r.campaign.runner", "rc3r.plotting", "rc3r.verify", "rc3r.io", "rc3r.errors")
 
 

@@ -116,8 +116,8 @@ def test_ur5_continuous_compiled_matches_reference():
     kw = dict(perturbed=True, payload=(0.0, 5.0), payload_com=(0, 0, 0.1))
     spec = _ur5_spec("fbl", "compiled", duration=0.3, **kw)
     spec = replace(spec, options=replace(spec.options, rate=None))
-    fast = simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-    ref = simulate(spec.plant, spec.law, spec.trajectory, replace(spec.options, engine="reference"))
+    fast = simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
+    ref = simulate(spec.true_rigid, spec.law, spec.trajectory, replace(spec.options, engine="reference"))
     assert fast.ok and ref.ok and fast.engine == "fast"
     np.testing.assert_array_equal(fast.t, ref.t)
     assert np.abs(fast.q - ref.q).max() <= 3e-6
@@ -163,7 +163,7 @@ def test_engine_names_aliases_and_registry():
 
     assert {"auto", "fast", "compiled", "python", "reference"} <= set(ENGINES)
     spec = rc3r.build_run(controller="fbl", duration=0.02, engine="compiled")
-    assert simulate(spec.plant, spec.law, spec.trajectory, spec.options).engine == "fast"
+    assert simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options).engine == "fast"
 
     class Echo(E.Engine):
         name = "echo-test"
@@ -176,7 +176,7 @@ def test_engine_names_aliases_and_registry():
     E.register_engine(Echo())
     try:
         opt = SimOptions(duration=0.02, rate=1000.0, engine="echo-test")
-        assert simulate(spec.plant, spec.law, spec.trajectory, opt).ok
+        assert simulate(spec.true_rigid, spec.law, spec.trajectory, opt).ok
     finally:
         E.ENGINES.pop("echo-test")
     with pytest.raises(ParameterError, match="engine must be one of"):
@@ -206,8 +206,8 @@ import rc3r
 from rc3r.simulate import _fast
 spec = rc3r.build_run(robot=sys.argv[1], controller="fbl", duration=0.002, rate=1000.0)
 t0 = time.perf_counter()
-res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-sim = _fast.simulator(spec.plant).instance
+res = rc3r.simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
+sim = _fast.simulator(spec.true_rigid).instance
 print("FILE", sim.__file__, os.stat(sim.__file__).st_mtime_ns, res.outcome, res.engine,
       "%.1f" % (time.perf_counter() - t0))
 """

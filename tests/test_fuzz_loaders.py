@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from rc3r.errors import Rc3rError
 from rc3r.io import read_toml, tomllib
 from rc3r.robots import load_urdf_robot, robot_class
-from rc3r.study import build_run
+from rc3r.runspec import build_run
 from rc3r.uncertainty import load_box
 
 ROOT = Path(__file__).resolve().parents[1]

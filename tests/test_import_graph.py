@@ -45,8 +45,8 @@ LAYERS = (
     ("rc3r.simulate",),
     # the sampled-data rule: a calculation on a law and a model that study asks for default gains
     ("rc3r.design.rule",),
-    # runs as data and the model checks
-    ("rc3r.study", "rc3r.plant_sets", "rc3r.verify"),
+    # runs as data (rc3r.study: the former name of rc3r.runspec) and the model checks
+    ("rc3r.runspec", "rc3r.study", "rc3r.plant_sets", "rc3r.verify"),
     # many runs; a run's controller as C
     ("rc3r.campaign", "rc3r.export"),
     # rc3r design: the rule verified over the bounds on the campaign runner

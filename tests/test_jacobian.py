@@ -23,7 +23,7 @@ from rc3r.simulate.engines._jacobian import work
 
 def _setup(controller, eps=None, **kw):
     spec = rc3r.build_run(controller=controller, perturbed=True, eps=eps, duration=1.0, **kw)
-    p = spec.plant
+    p = spec.true_rigid
     eng = simulator(as_plant(p).rigid)
     mod = eng.instance
     n = p.n
@@ -101,7 +101,7 @@ def test_analytic_jacobian_equals_central_differences(case, plant, rng):
     x = x0 + off * rng.uniform(-1, 1, x0.size)
     t = 0.37
     if plant == "friction-and-clip":
-        fx = clipped_friction(mod, t, x, kc, fx, code, cp, tp, spec.plant, Friction([0.4, 0.3, 0.2], [2.0, 1.5, 1.0],
+        fx = clipped_friction(mod, t, x, kc, fx, code, cp, tp, spec.true_rigid, Friction([0.4, 0.3, 0.2], [2.0, 1.5, 1.0],
                                                                                      v_s=0.05))
     ok, J, Ft = _analytic(mod, t, x, kc, fx, code, cp, tp, n)
     assert ok
@@ -149,7 +149,7 @@ def test_warm_jacobian_equals_cold(case, rng):
     u0 = _f(mod, t, x, kc, fx, code, cp, tp, n)[1]
     lim = 2.0 * np.abs(u0) + 1.0
     lim[0] = 0.5 * abs(u0[0])
-    fx = Plant(spec.plant, [Saturation(lim)]).pack()
+    fx = Plant(spec.true_rigid, [Saturation(lim)]).pack()
     ok, J, Ft = _analytic(mod, t, x, kc, fx, code, cp, tp, n)
     wk = mod._make_work(kc)
     S = _scratch(n, p)

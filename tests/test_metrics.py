@@ -36,7 +36,7 @@ def fake_run(*, mode="continuous", tv_exact=None, controller=None, yt_r_norm=Non
                                 "K": 100.0, "Lambda": 50.0}
     return SimResult(
         t=T, q=E + q_des, q_des=q_des, u=U, t_end=2.0, tv_exact=tv_exact, controller=controller,
-        robot={"robot": "toy"}, plant={"name": "nominal"}, mode=mode, engine="python", trajectory={},
+        robot={"robot": "toy"}, loop=None, plant={"name": "nominal"}, mode=mode, engine="python", trajectory={},
         outcome="finished", message="", yt_r_norm=np.array([0.0, 0.1, 0.6, 0.3, 0.9]) if yt_r_norm is None else yt_r_norm,
         wall_time_s=0.25, rhs_evals=7, steps=3,
         options=SimpleNamespace(rate=rate, rtol=1e-6, atol=1e-8))

@@ -62,7 +62,7 @@ import rc3r
 from rc3r.simulate import SimOptions, simulate
 spec = rc3r.build_run(controller="fbl", duration=0.01, rate=1000.0)
 x0 = np.array([0.8, 0.0, 0.0, 0.0, 0.0, 0.0])   # |q1| = 0.8 rad, inside q_max = 1
-res = simulate(spec.plant, spec.law, spec.trajectory, SimOptions(duration=0.002, rate=1000.0, q_max=1.0,
+res = simulate(spec.true_rigid, spec.law, spec.trajectory, SimOptions(duration=0.002, rate=1000.0, q_max=1.0,
                                                                  engine="fast"), x0=x0)
 print("STATUS", 0 if res.ok else 2 if "|q|" in res.message else res.message)
 """

@@ -9,7 +9,7 @@ from rc3r.cli import main
 from rc3r.experiments.paper3r import PAPER_SAMPLED_RATE
 from rc3r.experiments.paper3r import claims as _claims
 from rc3r.experiments.paper3r import scenarios as paper_scenarios
-from rc3r.study import execute
+from rc3r.runspec import execute
 
 REQUIRED = ["controller", "plant", "mode", "theta_model", "rho", "eps", "max_abs_error", "rms_error",
             "final_error_bound", "max_abs_torque", "chattering", "wall_time_s", "seed"]
@@ -147,7 +147,7 @@ def test_paper_table_says_the_verdict_not_ok():
     import re
 
     from rc3r.cli.run import _table
-    from rc3r.study import build_run, execute
+    from rc3r.runspec import build_run, execute
 
     spec = build_run(controller="robust", perturbed=True, eps=0.5, rate=10000.0, duration=0.3, engine="python")
     _, m = execute(spec)

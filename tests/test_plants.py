@@ -89,7 +89,7 @@ def test_compiled_engine_applies_effects_like_the_python_engine(spec, rate):
     different integrators), 1e-8 rad sampled (same RK4, different arithmetic of the plant: the
     sampled accuracy the simulate module states). The
     delivered torque never exceeds the limit."""
-    plant = Plant(spec.plant, build_effects(spec.plant, friction="2:1", torque_limit=150.0))
+    plant = Plant(spec.true_rigid, build_effects(spec.true_rigid, friction="2:1", torque_limit=150.0))
     opt = SimOptions(duration=0.5, rate=rate)
     fast = simulate(plant, spec.law, spec.trajectory, opt)
     py = simulate(plant, spec.law, spec.trajectory, SimOptions(duration=0.5, rate=rate, engine="python"))
@@ -97,7 +97,7 @@ def test_compiled_engine_applies_effects_like_the_python_engine(spec, rate):
     np.testing.assert_allclose(fast.q, py.q, atol=1e-6 if rate is None else 1e-8, rtol=0)
     assert np.abs(fast.u).max() <= 150.0 * (1 + 1e-12)  # stored rows interpolate between step ends
     assert np.abs(fast.u).max() == pytest.approx(150.0)
-    rigid = simulate(spec.plant, spec.law, spec.trajectory, opt)  # at 1 kHz the rigid run diverges
+    rigid = simulate(spec.true_rigid, spec.law, spec.trajectory, opt)  # at 1 kHz the rigid run diverges
     m = min(len(rigid.q), len(fast.q))
     assert not rigid.ok or np.abs(rigid.q[:m] - fast.q[:m]).max() > 1e-3  # the effects act
 
@@ -112,9 +112,9 @@ def test_loop_effects_against_recomputed_torques(spec, engine):
     """Sample k's delivered torque is the law's torque at the measurement of sample k - d: the state
     plus noise row k - d (LoopEffects.noise, seeded), q quantized. Recomputed here from the stored
     true states with the law's own Python method."""
-    law = rc3r.make_law("fbl", spec.plant.theta)
+    law = rc3r.make_law("fbl", spec.true_rigid.theta)
     loop = LoopEffects(3, noise_q=1e-3, noise_qd=1e-2, quantization=1e-3, delay=2, seed=11)
-    res = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.05, rate=1000.0, engine=engine),
+    res = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.05, rate=1000.0, engine=engine),
                    loop=loop)
     noise = loop.noise(50)
     assert res.ok and res.loop["seed"] == 11
@@ -122,16 +122,16 @@ def test_loop_effects_against_recomputed_torques(spec, engine):
         src = max(k - 2, 0)
         qm = np.round((res.q[src] + noise[src, :3]) / 1e-3) * 1e-3
         qdm = res.qd[src] + noise[src, 3:]
-        u, _, _ = law.torque(spec.plant, qm, qdm, _ref(spec.trajectory, src * 1e-3))
+        u, _, _ = law.torque(spec.true_rigid, qm, qdm, _ref(spec.trajectory, src * 1e-3))
         np.testing.assert_allclose(res.u[k], u, rtol=1e-9, atol=1e-9)
 
 
 def test_initial_error_and_continuous_refusal(spec):
     loop = LoopEffects(3, q0_error=[0.01, 0.0, -0.02])
-    res = simulate(spec.plant, spec.law, spec.trajectory, SimOptions(duration=0.01), loop=loop)
+    res = simulate(spec.true_rigid, spec.law, spec.trajectory, SimOptions(duration=0.01), loop=loop)
     np.testing.assert_allclose(res.q[0] - spec.trajectory.evaluate(0.0)[0], [0.01, 0.0, -0.02], atol=1e-15)
     with pytest.raises(ParameterError, match="sampled controller"):
-        simulate(spec.plant, spec.law, spec.trajectory, SimOptions(duration=0.01),
+        simulate(spec.true_rigid, spec.law, spec.trajectory, SimOptions(duration=0.01),
                  loop=LoopEffects(3, noise_q=1e-3))
 
 

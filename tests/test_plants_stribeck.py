@@ -121,7 +121,7 @@ def test_analytic_jacobian_with_stribeck_equals_central_differences(rng):
         x = x0 + 0.3 * rng.uniform(-1, 1, x0.size)
         x[n:2 * n] = [0.12, -0.04, 0.3]  # across the Stribeck peak and decay
         t = 0.37
-        fx = clipped_friction(mod, t, x, kc, fx, code, cp, tp, spec.plant, Stribeck(FC, FS, VS, FV, v_eps=0.05))
+        fx = clipped_friction(mod, t, x, kc, fx, code, cp, tp, spec.true_rigid, Stribeck(FC, FS, VS, FV, v_eps=0.05))
         assert S.Stribeck.code in fx[1:1 + 2 * int(fx[0]):2]
         ok, J, Ft = _analytic(mod, t, x, kc, fx, code, cp, tp, n)
         assert ok

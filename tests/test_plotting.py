@@ -12,7 +12,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from rc3r.cli import main
 from rc3r.plotting import estimate_errors, estimate_figure
-from rc3r.study import build_run, execute
+from rc3r.runspec import build_run, execute
 
 
 def _fake(t, z):
@@ -58,10 +58,10 @@ def test_estimate_of_a_real_adaptive_run_and_its_legends_off_the_data():
     backend = matplotlib.get_backend()
     spec = build_run(controller="adaptive", perturbed=True, duration=1.0)
     res, _ = execute(spec)
-    fig = estimate_figure(res, spec.plant.theta)
+    fig = estimate_figure(res, spec.true_rigid.theta)
     top, bottom = fig.get_axes()
     y = top.get_lines()[0].get_ydata()
-    expected = np.sqrt(((res.z - np.asarray(spec.plant.theta)) ** 2).sum(axis=1))
+    expected = np.sqrt(((res.z - np.asarray(spec.true_rigid.theta)) ** 2).sum(axis=1))
     np.testing.assert_allclose(y, expected, rtol=1e-12)
     assert abs(y[0] - 186.8129) < 5e-5 and y[-1] < y[0]
     # Slotine-Li: V = r^T M r / 2 + ||theta_hat - theta||^2 / (2 Gamma) never increases (scalar Gamma = 10)

@@ -14,7 +14,7 @@ from rc3r.simulate.export import columns
 @pytest.fixture(scope="module")
 def res():
     spec = rc3r.build_run(controller="robust", perturbed=True, duration=0.3)
-    return rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    return rc3r.simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
 
 
 def test_to_pandas_has_the_documented_columns_and_values(res):
@@ -71,7 +71,7 @@ def test_theory_figures_compare_laws_per_joint_and_show_the_boundary_layer():
     import matplotlib
 
     from rc3r.plotting import boundary_layer_figure, comparison_figure
-    from rc3r.study import build_run, execute
+    from rc3r.runspec import build_run, execute
 
     backend = matplotlib.get_backend()
     runs = {name: execute(build_run(controller=c, perturbed=True, eps=e, duration=0.2))[0]

@@ -63,7 +63,7 @@ def test_simulations_are_the_paper_scenarios_step_for_step(quick):
     """The benchmark times the runs it names: its integrator counts (rhs evaluations, steps,
     rejected steps; deterministic for a given build) equal those of an independent build_run of
     each scenario at the benchmark's duration (0.5 s in quick mode)."""
-    from rc3r.study import build_run, execute
+    from rc3r.runspec import build_run, execute
 
     _, r, _ = quick
     d = r["settings"]["sim_duration_s"]

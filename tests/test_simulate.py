@@ -3,6 +3,8 @@ divergence handling, and the paper's section-4 numbers."""
 from __future__ import annotations
 
 import importlib
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -97,13 +99,21 @@ def test_robust_laws_default_to_rodas_and_it_is_stiffly_accurate(plant, bounds, 
 
 
 def test_method_codes_are_the_templates():
-    """rc3r.simulate.METHODS (the names SimOptions takes) maps each name to the compiled template's
-    own code for that method (engines.compiled.ODE23S, ROS4, RODAS): the two are written in two modules."""
-    from rc3r.simulate import METHODS
+    """rc3r.simulate.METHODS and SAMPLED_METHODS (the names SimOptions takes) map each name to the compiled
+    template's own code for that method: both read rc3r.simulate.methods, the one place the codes are written
+    (the template imports them, so its codes are the module's own objects), and the codes are distinct."""
+    from rc3r.simulate import METHODS, SAMPLED_METHODS, _fast, methods
     from rc3r.simulate.engines import compiled
 
+    assert METHODS is methods.METHODS and _fast.PERIOD_METHODS is methods.PERIOD_METHODS
     assert METHODS == {"ode23s": compiled.ODE23S, "ros4": compiled.ROS4, "rodas": compiled.RODAS}
     assert len({compiled.ODE23S, compiled.ROS4, compiled.RODAS}) == 3
+    assert methods.PERIOD_METHODS == {"rk4": compiled.RK4_PERIODS, "ros4": compiled.ROS4_PERIODS,
+                                      "rodas": compiled.RODAS_PERIODS, "sdirk": methods.SDIRK_PERIODS}
+    assert len(set(methods.PERIOD_METHODS.values())) == 4
+    assert SAMPLED_METHODS == ("auto", "rk4", "ros4", "rodas", "sdirk")
+    src = Path(compiled.__file__).read_text()
+    assert not re.search(r"^\s*(ODE23S|ROS4|RODAS|RK4_PERIODS)\b.*=\s*\d", src, re.M)  # no second definition
 
 
 def test_bad_method_is_refused():
@@ -215,13 +225,13 @@ def test_wall_time_never_includes_compilation(monkeypatch):
     cache load), so its wall_time_s is the simulation's only: with the warm-up forgotten, a fresh
     integrator key would book it. Checked by counting the engine calls, not by timing."""
     S = importlib.import_module("rc3r.simulate")
-    from rc3r.study import build_run
+    from rc3r.runspec import build_run
 
     spec = build_run(controller="fbl", duration=0.05)
     calls = []
     from rc3r.simulate._fast import simulator
 
-    eng = simulator(spec.plant)
+    eng = simulator(spec.true_rigid)
     real = eng.continuous
 
     def counting(*a, **k):
@@ -230,10 +240,10 @@ def test_wall_time_never_includes_compilation(monkeypatch):
 
     monkeypatch.setattr(S, "_WARMED", set())
     monkeypatch.setattr(eng, "continuous", staticmethod(counting))
-    S.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    S.simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
     assert calls[0] == 3 and calls[1] == 51  # warm-up of 2 periods (3 rows), then the 0.05 s run
     calls.clear()
-    S.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    S.simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
     assert calls == [51]  # once per process and integrator
 
 
@@ -281,9 +291,9 @@ def test_one_rk4_step_per_ms_matches_the_reference(arm):
 
     spec = rc3r.build_run(robot=arm, controller="robust", perturbed=True, payload=(0.0, 3.0), rate=1000.0,
                           duration=1.0)
-    assert spec.options.nsub is None and default_substeps(spec.plant, 1000.0) == 1
-    fast = simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-    ref = simulate(spec.plant, spec.law, spec.trajectory, dataclasses.replace(spec.options, engine="reference"))
+    assert spec.options.nsub is None and default_substeps(spec.true_rigid, 1000.0) == 1
+    fast = simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
+    ref = simulate(spec.true_rigid, spec.law, spec.trajectory, dataclasses.replace(spec.options, engine="reference"))
     assert fast.outcome == ref.outcome == "finished"
     assert np.abs(fast.q - ref.q).max() < 1e-9
     assert np.abs(fast.u - ref.u).max() < 1e-9 * np.abs(ref.u).max()
@@ -379,9 +389,9 @@ def test_a_violent_sampled_run_is_redone_on_the_finer_step():
     import rc3r
 
     spec = rc3r.build_run(controller="robust-coeff", perturbed=True, rate=1000.0, duration=1.0, eps=0.5)
-    res = simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-    ref = simulate(spec.plant, spec.law, spec.trajectory, dataclasses.replace(spec.options, engine="reference"))
-    one = simulate(spec.plant, spec.law, spec.trajectory, dataclasses.replace(spec.options, nsub=1))
+    res = simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
+    ref = simulate(spec.true_rigid, spec.law, spec.trajectory, dataclasses.replace(spec.options, engine="reference"))
+    one = simulate(spec.true_rigid, spec.law, spec.trajectory, dataclasses.replace(spec.options, nsub=1))
     assert res.outcome == ref.outcome == "finished" and res.options.nsub == 4
     assert np.abs(one.qd).max() * 1e-3 > 0.02 or one.outcome != "finished"  # the 1 ms step is out of its range here
     np.testing.assert_allclose(np.abs(res.e).max(), np.abs(ref.e).max(), rtol=1e-3)

@@ -27,7 +27,7 @@ def test_tiny_eps_stops_on_the_work_budget_and_names_eps(perturbed):
     law = Robust(perturbed.law.theta, rho=perturbed.law.rho, eps=1e-6)
     opt = SimOptions(duration=10.0, max_steps=2e4)
     t0 = time.perf_counter()
-    res = simulate(perturbed.plant, law, perturbed.trajectory, opt)
+    res = simulate(perturbed.true_rigid, law, perturbed.trajectory, opt)
     assert time.perf_counter() - t0 < 120  # generous: the point is 'not hours'; 2e4 steps take ~0.1 s
     assert res.outcome == "diverged" and res.engine == "fast"
     assert "eps = 1e-06" in res.message and "max_steps" in res.message
@@ -38,14 +38,14 @@ def test_tiny_eps_stops_on_the_work_budget_and_names_eps(perturbed):
 
 def test_budget_does_not_touch_normal_runs(perturbed):
     """The paper's robust run needs ~8e3 steps per second: the default budget (1e6) never fires."""
-    res = simulate(perturbed.plant, perturbed.law, perturbed.trajectory, perturbed.options)
+    res = simulate(perturbed.true_rigid, perturbed.law, perturbed.trajectory, perturbed.options)
     assert res.ok and res.steps + res.rejected_steps < 1e5
 
 
 def test_python_engine_budget(perturbed):
     """The python engine counts right-hand-side evaluations (10 per step of the budget)."""
     law = Robust(perturbed.law.theta, rho=perturbed.law.rho, eps=1e-6)
-    res = simulate(perturbed.plant, law, perturbed.trajectory, SimOptions(duration=1.0, max_steps=50.0,
+    res = simulate(perturbed.true_rigid, law, perturbed.trajectory, SimOptions(duration=1.0, max_steps=50.0,
                                                                             engine="python"))
     assert res.outcome == "diverged" and "eps = 1e-06" in res.message
     assert res.rhs_evals <= 10 * 50 * 1.0 + 1000 + 1
@@ -74,7 +74,7 @@ def test_nan_torque_is_a_divergence_not_an_exception(perturbed, engine, rate):
     torque; now the run ends 'diverged' (non-finite) near the time the law turns NaN (q_d1 = sin t
     passes 0.2 at t = asin(0.2) = 0.2014 s) and keeps the rows before it."""
     law = _NaNAfter(perturbed.law.theta)
-    res = simulate(perturbed.plant, law, perturbed.trajectory, SimOptions(duration=0.5, rate=rate,
+    res = simulate(perturbed.true_rigid, law, perturbed.trajectory, SimOptions(duration=0.5, rate=rate,
                                                                             engine=engine))
     assert res.outcome == "diverged" and "NaN" in res.message
     assert 0.19 < res.t_end < 0.21
@@ -91,9 +91,9 @@ def test_run_stops_at_the_first_sample_past_its_bound(perturbed, which):
 
     phase = {"q": 0.0, "qd": np.pi / 2}[which]
     traj = Sines((0.0, 0.0, 0.0), ((1, 1.0, 1.0, 0.0), (2, 2.0, 1.0, phase), (3, 1.0, 1.0, 0.0)))
-    law = rc3r.make_law("fbl", perturbed.plant.theta)
+    law = rc3r.make_law("fbl", perturbed.true_rigid.theta)
     bounds = {"q": dict(q_max=1.5), "qd": dict(qd_max=1.5)}[which]
-    res = simulate(perturbed.plant, law, traj, SimOptions(duration=2.0, rate=1000.0, **bounds))
+    res = simulate(perturbed.true_rigid, law, traj, SimOptions(duration=2.0, rate=1000.0, **bounds))
     unit = {"q": "rad", "qd": "rad/s"}[which]
     assert res.outcome == "diverged" and f"|{which}| exceeded its bound (1.5 {unit})" in res.message
     x = res.q if which == "q" else res.qd
@@ -109,12 +109,12 @@ def test_step_underflow_exit_fires_at_its_threshold(perturbed):
     10 rejections (1e-5 -> 1e-15), at t = 0; a threshold of 1e-20 would take 15."""
     from rc3r.simulate import _fast
 
-    law = rc3r.make_law("fbl", perturbed.plant.theta)
+    law = rc3r.make_law("fbl", perturbed.true_rigid.theta)
     opt = SimOptions(duration=0.01, q_max=1e300, qd_max=1e300, u_max=1e308, engine="fast")
     x0 = np.array([0.0, 5.0, 0.0, 1e150, 0.0, 0.0])
     from rc3r.plants import as_plant
 
-    res = _fast.run(as_plant(perturbed.plant), law, perturbed.trajectory, opt, x0)
+    res = _fast.run(as_plant(perturbed.true_rigid), law, perturbed.trajectory, opt, x0)
     assert res.outcome == "diverged" and S.STATUS_TEXT[S.HMIN] in res.message
     assert res.t_end == 0.0 and res.steps == 0
     assert res.rejected_steps == 10
@@ -140,8 +140,8 @@ def test_a_signal_lost_inside_numba_still_stops_the_run(perturbed, monkeypatch):
     monkeypatch.setattr(SIM, "_warm_up", swallowing_warm_up)
     try:
         with pytest.raises(KeyboardInterrupt):
-            simulate(perturbed.plant, perturbed.law, perturbed.trajectory, SimOptions(duration=0.1))
+            simulate(perturbed.true_rigid, perturbed.law, perturbed.trajectory, SimOptions(duration=0.1))
     finally:
         monkeypatch.undo()
         S.STOP.clear()
-    assert simulate(perturbed.plant, perturbed.law, perturbed.trajectory, SimOptions(duration=0.01)).ok
+    assert simulate(perturbed.true_rigid, perturbed.law, perturbed.trajectory, SimOptions(duration=0.01)).ok

@@ -42,10 +42,10 @@ def test_python_sampled_rk4_equals_the_reference_integrator(spec, model):
     O(h^4) at h = 0.25 ms; the stated sampled accuracy of rc3r.simulate is 1e-8 rad), the torques
     within 1e-9 of their maximum. A wrong RK4 weight or stage (an O(h) or O(h^2) method) misses this
     by orders of magnitude. The python engine evaluates the plant exactly 4 x 4 times a period."""
-    law = rc3r.make_law("fbl", spec.plant.theta if model == "exact" else spec.law.theta)
+    law = rc3r.make_law("fbl", spec.true_rigid.theta if model == "exact" else spec.law.theta)
     opt = dict(duration=0.2, rate=1000.0, nsub=4)
-    py = simulate(spec.plant, law, spec.trajectory, SimOptions(engine="python", **opt))
-    ref = simulate(spec.plant, law, spec.trajectory, SimOptions(engine="reference", **opt))
+    py = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(engine="python", **opt))
+    ref = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(engine="reference", **opt))
     assert py.ok and ref.ok and py.engine == "python" and ref.engine == "reference"
     np.testing.assert_array_equal(py.t, ref.t)
     np.testing.assert_allclose(py.t, np.arange(201) * 1e-3, rtol=0, atol=1e-15)
@@ -61,14 +61,14 @@ def test_python_sampled_first_period_by_hand(spec):
     """One period by hand: the law's torque at the initial state (on the trajectory), held over
     T = 1 ms, integrated by a classical RK4 written here on the plant's forward dynamics (4 steps of
     0.25 ms): the engine's second row equals it to rounding (1e-12)."""
-    law = rc3r.make_law("fbl", spec.plant.theta)
-    res = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.002, rate=1000.0, nsub=4,
+    law = rc3r.make_law("fbl", spec.true_rigid.theta)
+    res = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.002, rate=1000.0, nsub=4,
                                                                 engine="python"))
     n = 3
     q0, qd0, _ = spec.trajectory.evaluate(0.0)
-    u0, _, _ = law.torque(spec.plant, q0, qd0, _ref(spec.trajectory, 0.0), law.initial_state())
+    u0, _, _ = law.torque(spec.true_rigid, q0, qd0, _ref(spec.trajectory, 0.0), law.initial_state())
 
-    plant = as_plant(spec.plant)
+    plant = as_plant(spec.true_rigid)
 
     def f(x):
         return np.concatenate([x[n:], plant.forward_dynamics(x[:n], x[n:], u0, delivered=True)])
@@ -89,12 +89,12 @@ def test_adaptive_estimate_is_forward_euler_of_its_law(spec):
     the torque of each sample is the law's at that sample's state and estimate."""
     law = rc3r.make_law("adaptive", spec.law.theta)
     T = 1e-3
-    res = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.003, rate=1000.0, engine="python"))
+    res = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.003, rate=1000.0, engine="python"))
     q0, qd0, _ = spec.trajectory.evaluate(0.0)
     z0 = law.initial_state()
     x1 = np.array([res.q[1], res.qd[1]])
-    u0, zdot0, _ = law.torque(spec.plant, q0, qd0, _ref(spec.trajectory, 0.0), z0)
-    u1, zdot1, _ = law.torque(spec.plant, x1[0], x1[1], _ref(spec.trajectory, T), res.z[1])
+    u0, zdot0, _ = law.torque(spec.true_rigid, q0, qd0, _ref(spec.trajectory, 0.0), z0)
+    u1, zdot1, _ = law.torque(spec.true_rigid, x1[0], x1[1], _ref(spec.trajectory, T), res.z[1])
     # the torque uses the estimate z (not a slice that runs into qd)
     np.testing.assert_allclose(res.u[0], u0, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(res.u[1], u1, rtol=1e-12, atol=1e-12)
@@ -108,10 +108,10 @@ def test_sampled_rows_are_decimated_to_the_output_rate_and_tv_counts_every_sampl
     the exact total variation counts all 40 sample-to-sample steps of the applied torque, so it
     equals the sum over a 4 kHz run stored in full (the same samples), and is at least the stored
     grid's total variation (the triangle inequality)."""
-    law = rc3r.make_law("fbl", spec.plant.theta)
-    dec = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.01, rate=4000.0, output_rate=1000.0,
+    law = rc3r.make_law("fbl", spec.true_rigid.theta)
+    dec = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.01, rate=4000.0, output_rate=1000.0,
                                                                 engine="python"))
-    full = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.01, rate=4000.0, output_rate=4000.0,
+    full = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.01, rate=4000.0, output_rate=4000.0,
                                                                  engine="python"))
     np.testing.assert_allclose(dec.t, np.arange(11) * 1e-3, rtol=0, atol=1e-15)
     assert full.t.size == 41
@@ -129,9 +129,9 @@ def test_python_continuous_tracks_the_reference(spec):
     tracking error of exact FBL from the trajectory's start stays at the integrator's level
     (measured 3e-12 in the reference; < 1e-9 asserted). The reference's tighter tolerances cost it
     several times the python engine's right-hand-side evaluations (the engines are not swapped)."""
-    law = rc3r.make_law("fbl", spec.plant.theta)
-    py = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.3, engine="python"))
-    ref = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.3, engine="reference"))
+    law = rc3r.make_law("fbl", spec.true_rigid.theta)
+    py = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.3, engine="python"))
+    ref = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.3, engine="reference"))
     assert py.ok and ref.ok and py.mode == "continuous"
     np.testing.assert_allclose(py.t, np.linspace(0, 0.3, 301), rtol=0, atol=1e-15)
     np.testing.assert_array_equal(py.t, ref.t)
@@ -229,13 +229,13 @@ def test_divergence_messages_name_the_bound(spec):
     assert _message(S.NONFINITE, 3.0, opt) == "diverged at t = 3 s: state became NaN or infinite"
     assert _message(S.INTERRUPTED, 0.5, opt).startswith("interrupted at t = 0.5 s")
 
-    class PerJoint:
-        eps_i = np.array([0.3, 0.02, 0.5])
-
-    msg = _message(S.WORK, 0.25, opt, PerJoint())
+    per_coefficient = rc3r.make_law("robust-coeff", np.ones(3), rho_i=np.ones(3), eps_i=[0.3, 0.02, 0.5])
+    msg = _message(S.WORK, 0.25, opt, per_coefficient)
     assert msg.startswith("stopped at t = 0.25 s: the integrator needed more than 5000 steps per simulated second")
     assert "eps = 0.02 makes the loop too stiff" in msg
-    assert "(the loop is too stiff;" in _message(S.WORK, 0.25, opt, object())
+    assert "eps = 0.5 makes" in _message(S.WORK, 0.25, opt, rc3r.make_law("robust", np.ones(3), rho=1.0, eps=0.5))
+    assert "(the loop is too stiff;" in _message(S.WORK, 0.25, opt, rc3r.make_law("fbl", np.ones(3)))
+    assert "(the loop is too stiff;" in _message(S.WORK, 0.25, opt)
 
 
 def test_a_run_starts_on_the_trajectory_or_at_the_given_state(spec):
@@ -243,25 +243,25 @@ def test_a_run_starts_on_the_trajectory_or_at_the_given_state(spec):
     x0 given: the first row is x0; x0 of the wrong size or not finite is refused in one line."""
     law = rc3r.make_law("adaptive", spec.law.theta)
     opt = SimOptions(duration=0.002, rate=1000.0, engine="python")
-    res = simulate(spec.plant, law, spec.trajectory, opt)
+    res = simulate(spec.true_rigid, law, spec.trajectory, opt)
     q0, qd0, _ = spec.trajectory.evaluate(0.0)
     np.testing.assert_array_equal(res.q[0], q0)
     np.testing.assert_array_equal(res.qd[0], qd0)
     np.testing.assert_array_equal(res.z[0], law.initial_state())
     x0 = np.r_[q0 + 0.01, qd0 - 0.02]
-    res = simulate(spec.plant, law, spec.trajectory, opt, x0=x0)
+    res = simulate(spec.true_rigid, law, spec.trajectory, opt, x0=x0)
     np.testing.assert_array_equal(np.r_[res.q[0], res.qd[0]], x0)
     for bad in (np.zeros(5), np.r_[np.zeros(5), np.nan]):
         with pytest.raises(ParameterError, match="initial state must be 6 finite numbers"):
-            simulate(spec.plant, law, spec.trajectory, opt, x0=bad)
+            simulate(spec.true_rigid, law, spec.trajectory, opt, x0=bad)
     assert math.isclose(res.t_end, 0.002) and res.outcome == "finished" and res.message == "finished at t = 0.002 s"
 
 
 def test_stored_desired_positions_are_the_trajectorys(spec):
     """q_des of a sampled run is the trajectory's position at each stored sample (not its velocity
     or acceleration row), in the python engine as in the reference."""
-    law = rc3r.make_law("fbl", spec.plant.theta)
-    res = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=0.01, rate=1000.0, engine="python"))
+    law = rc3r.make_law("fbl", spec.true_rigid.theta)
+    res = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=0.01, rate=1000.0, engine="python"))
     for i in (0, 3, 10):
         np.testing.assert_allclose(res.q_des[i], spec.trajectory.evaluate(res.t[i])[0], rtol=0, atol=1e-15)
     np.testing.assert_allclose(res.e, res.q - res.q_des, rtol=0, atol=0)
@@ -272,13 +272,13 @@ def test_a_trajectory_or_model_of_another_size_is_refused(spec):
     (more) on the 3R is refused in one line, as is a law with another coefficient count."""
     from rc3r.trajectory import Sines
 
-    law = rc3r.make_law("fbl", spec.plant.theta)
+    law = rc3r.make_law("fbl", spec.true_rigid.theta)
     for n in (2, 4):
         traj = Sines((0.0,) * n, tuple((j, 0.1, 1.0, 0.0) for j in range(1, n + 1)))
         with pytest.raises(ParameterError, match=f"trajectory has {n} joints, robot 'nominal' has 3"):
-            simulate(spec.plant, law, traj, SimOptions(duration=0.01, engine="python"))
+            simulate(spec.true_rigid, law, traj, SimOptions(duration=0.01, engine="python"))
     with pytest.raises(ParameterError, match="coefficients"):
-        simulate(spec.plant, rc3r.make_law("fbl", np.zeros(14)), spec.trajectory, SimOptions(duration=0.01))
+        simulate(spec.true_rigid, rc3r.make_law("fbl", np.zeros(14)), spec.trajectory, SimOptions(duration=0.01))
 
 
 def test_python_steps_are_scipys_radau_steps(spec):
@@ -291,8 +291,8 @@ def test_python_steps_are_scipys_radau_steps(spec):
 
     law = rc3r.make_law("fbl", spec.law.theta)
     opt = SimOptions(duration=0.2, engine="python")
-    res = simulate(spec.plant, law, spec.trajectory, opt)
-    loop = _Loop(as_plant(spec.plant), law, spec.trajectory)
+    res = simulate(spec.true_rigid, law, spec.trajectory, opt)
+    loop = _Loop(as_plant(spec.true_rigid), law, spec.trajectory)
     x0 = np.concatenate([*spec.trajectory.evaluate(0.0)[:2], law.initial_state()])
     sol = solve_ivp(loop.rhs, (0.0, 0.2), x0, method="Radau", rtol=opt.rtol, atol=opt.atol)
     assert sol.success and res.ok
@@ -311,16 +311,16 @@ def test_mujoco_plant_in_the_python_engine_equals_the_pinocchio_plant():
     pin_run = rc3r.build_run(**kw)
     mj_run = rc3r.build_run(plant_engine="mujoco", **kw)
     opt = SimOptions(duration=0.05, rate=1000.0, engine="python")
-    a = simulate(pin_run.true_plant, pin_run.law, pin_run.trajectory, opt, model=pin_run.plant)
-    b = simulate(mj_run.true_plant, mj_run.law, mj_run.trajectory, opt, model=mj_run.plant)
+    a = simulate(pin_run.true_plant, pin_run.law, pin_run.trajectory, opt, model=pin_run.true_rigid)
+    b = simulate(mj_run.true_plant, mj_run.law, mj_run.trajectory, opt, model=mj_run.true_rigid)
     assert a.ok and b.ok and a.q.shape == b.q.shape == (51, 6)
     assert np.max(np.abs(a.q - b.q)) < 1e-8 and np.max(np.abs(a.qd - b.qd)) < 1e-6
     assert np.ptp(b.q, axis=0).max() > 1e-3  # the arm moves
     fr = rc3r.build_run(plant_engine="mujoco", friction="1:0.5", **kw)
     with pytest.raises(ParameterError, match="joint-torque effects"):
-        simulate(fr.true_plant, fr.law, fr.trajectory, opt, model=fr.plant)
+        simulate(fr.true_plant, fr.law, fr.trajectory, opt, model=fr.true_rigid)
     sat = rc3r.build_run(plant_engine="mujoco", torque_limit=1e4, **kw)
-    assert simulate(sat.true_plant, sat.law, sat.trajectory, opt, model=sat.plant).ok
+    assert simulate(sat.true_plant, sat.law, sat.trajectory, opt, model=sat.true_rigid).ok
 
 
 @pytest.mark.parametrize("which", ["q", "qd"])
@@ -334,9 +334,9 @@ def test_continuous_python_run_stops_where_the_bound_is_crossed(spec, which):
 
     phase = {"q": 0.0, "qd": np.pi / 2}[which]
     traj = Sines((0.0, 0.0, 0.0), ((1, 1.0, 1.0, 0.0), (2, 2.0, 1.0, phase), (3, 1.0, 1.0, 0.0)))
-    law = rc3r.make_law("fbl", spec.plant.theta)
+    law = rc3r.make_law("fbl", spec.true_rigid.theta)
     bounds = {"q": dict(q_max=1.5), "qd": dict(qd_max=1.5)}[which]
-    res = simulate(spec.plant, law, traj, SimOptions(duration=1.0, engine="python", **bounds))
+    res = simulate(spec.true_rigid, law, traj, SimOptions(duration=1.0, engine="python", **bounds))
     unit = {"q": "rad", "qd": "rad/s"}[which]
     assert res.outcome == "diverged" and f"|{which}| exceeded its bound (1.5 {unit})" in res.message
     assert res.t_end == pytest.approx(np.arcsin(0.75), abs=1e-6)
@@ -362,7 +362,7 @@ def test_python_budget_scales_with_the_duration(spec, duration):
     from rc3r.controllers import Robust
 
     law = Robust(spec.law.theta, rho=spec.law.rho, eps=1e-6)
-    res = simulate(spec.plant, law, spec.trajectory, SimOptions(duration=duration, max_steps=50.0, engine="python"))
+    res = simulate(spec.true_rigid, law, spec.trajectory, SimOptions(duration=duration, max_steps=50.0, engine="python"))
     assert res.outcome == "diverged" and "more than 50 steps per simulated second" in res.message
     assert res.rhs_evals == int(10 * 50 * duration) + 1000
     assert res.t_end < duration

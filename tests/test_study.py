@@ -1,4 +1,4 @@
-"""rc3r.study: one source of truth for a run (plant and controller bounds from the same box),
+"""rc3r.runspec: one source of truth for a run (plant and controller bounds from the same box),
 the provenance in metrics.json, engine choice, and DivergenceError."""
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from rc3r.cli import main
 from rc3r.controllers import make_law
 from rc3r.errors import DivergenceError, ParameterError
 from rc3r.simulate import SimOptions, simulate
-from rc3r.study import build_run, execute
+from rc3r.runspec import build_run, execute
 
 BOX = textwrap.dedent("""
     description = "a smaller box than the paper's, and a heavier last link"
@@ -57,10 +57,10 @@ def test_run_with_box_uses_the_bounds_of_that_box(box_file, tmp_path, capsys):
 
 def test_plant_is_drawn_from_the_same_box(box_file):
     """--plant upper with --box FILE: the plant is nominal + the box's upper deltas (m3 + 5 kg)."""
-    nominal = build_run(controller="fbl").plant
+    nominal = build_run(controller="fbl").true_rigid
     spec = build_run(controller="fbl", perturbed=True, plant="upper", box=str(box_file))
-    d = spec.plant.standard_parameters() - nominal.standard_parameters()
-    names = list(spec.plant.standard_parameter_names)
+    d = spec.true_rigid.standard_parameters() - nominal.standard_parameters()
+    names = list(spec.true_rigid.standard_parameter_names)
     assert d[names.index("m3")] == pytest.approx(5.0) and d[names.index("m1")] == pytest.approx(2.0)
     assert d[names.index("Ixy2")] == pytest.approx(0.1)
 
@@ -71,7 +71,7 @@ def test_default_run_records_where_its_model_came_from():
     assert "paper's method" in spec.model["theta_source"] and spec.model["box"].endswith("paper_box.toml")
     assert spec.model["nominal"] == "nominal"
     ideal = build_run(controller="fbl")
-    np.testing.assert_array_equal(ideal.model["theta0"], ideal.plant.theta)
+    np.testing.assert_array_equal(ideal.model["theta0"], ideal.true_rigid.theta)
     assert ideal.model["theta_source"].startswith("theta of the plant")
 
 
@@ -91,18 +91,18 @@ def test_engine_auto_picks_fast_for_compiled_laws_and_python_otherwise():
             return self.theta, np.zeros(0), 0.0
 
     py = Py(spec.law.theta)
-    res_py = simulate(spec.plant, py, spec.trajectory, SimOptions(duration=0.05))
+    res_py = simulate(spec.true_rigid, py, spec.trajectory, SimOptions(duration=0.05))
     assert res_py.engine == "python" and res_py.ok
     with pytest.raises(ParameterError, match="no compiled kernel"):
-        simulate(spec.plant, py, spec.trajectory, SimOptions(duration=0.05, engine="fast"))
+        simulate(spec.true_rigid, py, spec.trajectory, SimOptions(duration=0.05, engine="fast"))
 
 
 def test_python_engine_matches_fast_engine_sampled():
     """Same law, same ZOH + RK4 scheme: the python engine (Pinocchio ABA plant, law from Python)
     and the fast engine (compiled closed form) agree to 1e-9 rad over 1 s at 1 kHz."""
     spec = build_run(controller="robust", perturbed=True, rate=1000.0, duration=1.0, eps=50.0)
-    fast = simulate(spec.plant, spec.law, spec.trajectory, spec.options)
-    py = simulate(spec.plant, spec.law, spec.trajectory, SimOptions(duration=1.0, rate=1000.0, engine="python"))
+    fast = simulate(spec.true_rigid, spec.law, spec.trajectory, spec.options)
+    py = simulate(spec.true_rigid, spec.law, spec.trajectory, SimOptions(duration=1.0, rate=1000.0, engine="python"))
     assert fast.ok and py.ok and fast.engine == "fast" and py.engine == "python"
     np.testing.assert_array_equal(fast.t, py.t)
     assert np.abs(fast.q - py.q).max() <= 1e-9
@@ -122,7 +122,7 @@ def test_divergence_raises_with_the_result_attached():
 def test_law_and_robot_sizes_must_match():
     spec = build_run(controller="fbl", duration=0.01)
     with pytest.raises(ParameterError, match="15"):
-        simulate(spec.plant, make_law("fbl", np.ones(4)), spec.trajectory)
+        simulate(spec.true_rigid, make_law("fbl", np.ones(4)), spec.trajectory)
 
 
 def test_unknown_gain_in_config_is_refused(tmp_path, capsys):
@@ -209,7 +209,7 @@ def test_payload_alone_makes_the_controller_not_know_the_payload(ur5):
     com = (0.0, 0.0, 0.1)
     spec = build_run(robot="ur5", controller="robust", payload=(0.0, 5.0), payload_com=com, duration=0.01)
     assert spec.scenario == "perturbed" and spec.name == "robust-perturbed"
-    th0, plant = np.array(spec.model["theta0"]), np.asarray(spec.plant.theta)
+    th0, plant = np.array(spec.model["theta0"]), np.asarray(spec.true_rigid.theta)
     np.testing.assert_allclose(plant, with_payload(ur5, 5.0, com).theta, rtol=0, atol=1e-12)
     np.testing.assert_allclose(th0, with_payload(ur5, 2.5, com).theta, rtol=0, atol=1e-12)
     assert np.abs(th0 - plant).max() > 0.1
@@ -223,7 +223,7 @@ def test_payload_with_explicit_ideal_knowledge(ur5):
     spec = build_run(robot="ur5", controller="fbl", payload=(0.0, 5.0), config={"model": {"theta": "plant"}},
                      duration=0.01)
     assert spec.scenario == "ideal"
-    np.testing.assert_array_equal(spec.model["theta0"], spec.plant.theta)
+    np.testing.assert_array_equal(spec.model["theta0"], spec.true_rigid.theta)
 
 
 def test_payload_help_says_the_controller_does_not_know_it(capsys):
@@ -259,7 +259,7 @@ def test_degenerate_joint_limits_give_a_moving_default_trajectory_and_a_warning(
     prints it as one `rc3r: warning:` line."""
     import math
 
-    import rc3r.study as study
+    import rc3r.runspec as study
     from rc3r.robots.pinocchio import PinocchioRobot, example_robot_data_dir
 
     dp = PinocchioRobot.from_urdf(example_robot_data_dir() / "double_pendulum_description/urdf/double_pendulum.urdf")

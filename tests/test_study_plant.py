@@ -18,7 +18,7 @@ def test_config_names_the_arm_and_its_plant():
            "plant": {"friction": "urdf", "torque_limit": "urdf", "noise": "1e-4:0", "delay": 1},
            "simulation": {"rate": 1000.0, "duration": 0.05}}
     spec = rc3r.build_run(controller="fbl", config=cfg)
-    assert spec.plant.n == 6 and spec.robot_model.locked == {"jointGripper": 0.0}
+    assert spec.true_rigid.n == 6 and spec.controller_model.locked == {"jointGripper": 0.0}
     assert [e.name for e in spec.true_plant.effects] == ["friction", "saturation", "limits"]
     assert spec.loop.delay == 1 and spec.loop.noise_q.tolist() == [1e-4] * 6 and spec.tolerance == 0.05
     res, m = rc3r.execute(spec)

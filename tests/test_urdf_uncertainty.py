@@ -109,16 +109,16 @@ def test_the_lightest_plant_is_the_worst_corner_and_its_figure_is_pinocchios():
     lo, hi = ranges(DEFAULT, 6)
 
     def crba_gain(factors):
-        Ms = np.array([_scaled_crba(spec.robot_model, factors, qk) for qk in q])
+        Ms = np.array([_scaled_crba(spec.controller_model, factors, qk) for qk in q])
         return float(np.max(plant_gain(G, Ms)[0])) / 1000.0
 
     assert crba_gain(lo) == pytest.approx(top["T_lambda"], rel=1e-8)
     vertices = [crba_gain(np.where(bits, hi, lo)) for bits in itertools.product((0, 1), repeat=6)]
     assert max(vertices) == pytest.approx(top["T_lambda"], rel=1e-8)
-    draws = [rc3r.build_run(controller="robust", config=cfg, plant=f"random:{s}", rate=1000.0, eps=1.0).plant
+    draws = [rc3r.build_run(controller="robust", config=cfg, plant=f"random:{s}", rate=1000.0, eps=1.0).true_rigid
              for s in range(10)]
     assert max(float(np.max(plant_gain(G, hard.search.mass(p.theta))[0])) / 1000.0 for p in draws) < top["T_lambda"]
-    light = rc3r.build_run(controller="robust", config=cfg, plant="lower+urdf-lower", rate=1000.0, eps=1.0).plant
+    light = rc3r.build_run(controller="robust", config=cfg, plant="lower+urdf-lower", rate=1000.0, eps=1.0).true_rigid
     assert float(np.max(plant_gain(G, hard.search.mass(light.theta))[0])) / 1000.0 == pytest.approx(top["T_lambda"])
 
 
@@ -146,7 +146,7 @@ def test_a_light_wrist_breaks_eq6_where_the_old_box_passes_and_the_design_refuse
     from rc3r.uncertainty.box import perturb
 
     cfg, spec, sp, d, hard = _ur5_payload(None)
-    rho, arm, q = spec.model["rho"], spec.robot_model, hard.search.q
+    rho, arm, q = spec.model["rho"], spec.controller_model, hard.search.q
     sl = {k: v for k, v in d.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
     box = _old_box(arm)
     old_M = [hard.search.mass(perturb(arm, box, f"random:{s}", simulable=True).theta) for s in range(30)]

@@ -4,7 +4,8 @@ Public API (everything a script or notebook needs)::
 
     import rc3r
     spec = rc3r.build_run(controller="robust", perturbed=True)   # the paper's perturbed scenario
-    res = rc3r.simulate(spec.plant, spec.law, spec.trajectory)  # or: res, metrics = rc3r.execute(spec)
+    res, metrics = rc3r.execute(spec)   # the whole run: its plant with the effects, loop, controller's model
+    res = rc3r.simulate(spec.true_plant, spec.law, spec.trajectory)  # the same plant, by hand
     arm = rc3r.load_robot()                                     # the nominal robot (Table 1)
     law = rc3r.make_law("fbl", arm.theta)                       # any registered law
 
@@ -47,6 +48,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.controllers.adaptive``          law ``adaptive``: Slotine--Li's estimate as the law's state (one module)
 ``rc3r.controllers.pd_plus``           law ``pd-plus``: Paden--Panja's PD+, the worked example of a compiled law
 ``rc3r.controllers.controller``        :class:`Controller`: ``u = step(t, q, qd)`` for loops rc3r does not run
+``rc3r.controllers.sampled``           the sampled loop in Python: hold, delay line, Euler step of z (engine and Controller)
 ``rc3r.controllers.guarantee``         the robust laws' ultimate bound on ``|e_j|`` (Spong's UUB made explicit)
 ``rc3r.controllers.ellipsoid``         law ``robust-ellipsoid``: Spong's term for ||theta - theta_0||_P <= 1
 ``rc3r.trajectory``                    desired trajectories (sines, quintic), compiled evaluation
@@ -80,6 +82,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.plants.limits``                 joint position/velocity limits, reported when crossed (a monitor)
 ``rc3r.plants.loop``                   sensor noise, quantization, delay, initial error of a sampled loop
 ``rc3r.plants._kernels``               an effect layout's slot arithmetic and the loop's measurement (numba)
+``rc3r.plants.rigid``                  the rigid-body contract :class:`RigidBody` (a Robot, or MuJoCo's)
 ``rc3r.plants.mujoco``                 MuJoCo as the plant's rigid body (optional extra)
 ``rc3r.simulate``                      :func:`simulate`, :class:`SimOptions`, :class:`SimResult`
 ``rc3r.simulate._fast``                the compiled engine's driver: one instantiation per kernel supply
@@ -96,9 +99,11 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.metrics``              scalar metrics of a run
 ``rc3r.simulate.verdict``              what a run means: clean, chattering, saturated, limit-violated, diverged
 ``rc3r.simulate.status``               status codes and the compiled bound check
+``rc3r.simulate.methods``              the integration methods' names and codes, written once (SimOptions and the template)
 ``rc3r.simulate.steps``                how a sampled run advances the plant: RK4 sub-steps, implicit periods
 ``rc3r.simulate.export``               a result as a table, CSV, figure, run directory
-``rc3r.study``                         a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
+``rc3r.runspec``                       a run as data: :class:`RunSpec`, :func:`build_run`, :func:`execute`
+``rc3r.study``                         the former name of ``rc3r.runspec`` (a deprecated re-export)
 ``rc3r.plant_sets``                    the plants of a run's bounds (payload, box, URDF uncertainty, ellipsoid)
 ``rc3r.export``                        ``rc3r export``: a run's controller as self-contained C99, with a checking harness
 ``rc3r.export.c``                      the C controller: trajectory, law, state, zero-order hold, delay line
@@ -159,7 +164,7 @@ from .plants import LoopEffects, Plant
 from .errors import ConfigError, DivergenceError, ParameterError, Rc3rError, UrdfError
 from .robots import ROBOTS, Robot, load_robot
 from .simulate import SimOptions, SimResult, simulate
-from .study import RunSpec, build_run, execute
+from .runspec import RunSpec, build_run, execute
 
 __all__ = [
     "__version__",

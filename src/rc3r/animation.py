@@ -48,9 +48,9 @@ def check_animatable(robot, fmt: str = "gif") -> None:
         raise ConfigError("--animate mp4 needs ffmpeg on the PATH (not found); --animate alone writes a GIF")
     import pinocchio as pin
 
-    model = getattr(robot, "model", None)
+    model = robot.model
     if not isinstance(model, pin.Model):
-        raise ConfigError(f"cannot animate robot '{getattr(robot, 'label', robot)}': it has no Pinocchio model "
+        raise ConfigError(f"cannot animate robot '{robot.label}': it has no Pinocchio model "
                           "(the robot contract's `model`)")
     if model.nq != robot.n:
         raise ConfigError(f"cannot animate robot '{robot.label}': its Pinocchio model has nq = {model.nq}, "
@@ -144,8 +144,8 @@ def arm_frames(res, robot, fps: float = FPS, max_frames: int = MAX_FRAMES) -> Ar
 
 def _robot_name(robot) -> str:
     """``ur5 (ur5_robot.urdf)``, ``rr3 (nominal)``: the registry name and the label (a path shortened)."""
-    name = robot.describe().get("robot", "robot") if hasattr(robot, "describe") else "robot"
-    label = str(getattr(robot, "label", ""))
+    name = robot.describe().get("robot", "robot")
+    label = str(robot.label)
     label = Path(label).name if "/" in label else label
     return f"{name} ({label})" if label and label != name else str(name)
 

@@ -2,7 +2,7 @@ r"""The plants of a run's bounds: a payload range, an uncertainty box (around a 
 identification's ellipsoid; the plant spec a run names (``nominal``, ``upper``, ``random:<seed>``,
 ``centre``, ``lightest:...`` ...) drawn from them.
 
-:func:`rc3r.study.build_run` resolves a run's bounds into a :class:`_Bounds` and asks :func:`_plant`
+:func:`rc3r.runspec.build_run` resolves a run's bounds into a :class:`_Bounds` and asks :func:`_plant`
 for the plant; ``rc3r design``'s verification draws the same plants (:mod:`rc3r.design.verify`).
 """
 from __future__ import annotations
@@ -40,7 +40,7 @@ def resolve_box(nominal, box_path=None):
         return load_box(box_path, nominal.standard_parameter_names)
     box = nominal.default_box()
     if box is None:
-        raise ConfigError(f"robot {getattr(nominal, 'robot_name', nominal.name)!r} has no default box: "
+        raise ConfigError(f"robot {nominal.robot_name or nominal.name!r} has no default box: "
                           "give --box FILE or --payload LO:HI")
     return box
 
@@ -50,7 +50,7 @@ class _Bounds:
 
     def __init__(self, nominal, box_path=None, payload=None):
         self.nominal, self.box_path, self.payload = nominal, box_path, payload
-        self.urdf_uncertainty = 0.0  # [plant] urdf_uncertainty: the plants' arm beyond the bounds
+        self.urdf_uncertainty = None  # [plant] urdf_uncertainty (a spec): the plants' arm beyond the bounds
         self._box = self._paper = self._cert = self._pay = None
 
     @property
@@ -96,7 +96,7 @@ def _urdf_set(nominal, bounds: _Bounds):
     :class:`rc3r.uncertainty.urdf.URDFSet` of ``nominal``), or None."""
     from .uncertainty.urdf import URDFSet, parse_spec
 
-    spec = parse_spec(getattr(bounds, "urdf_uncertainty", None))
+    spec = parse_spec(bounds.urdf_uncertainty)
     return None if spec is None else URDFSet(nominal, spec)
 
 
@@ -107,7 +107,7 @@ def _arm_seed(seed: int) -> int:
 
 def _plant(nominal, bounds: _Bounds, spec: str, seed: int):
     if spec.endswith(".urdf") or Path(spec).suffix == ".urdf":
-        lock = getattr(nominal, "locked", None)
+        lock = nominal.locked
         plant = type(nominal).from_urdf(spec, lock=lock) if lock else type(nominal).from_urdf(spec)
     elif bounds.payload is not None:
         plant = _payload_plant(nominal, bounds.payload, spec, _urdf_set(nominal, bounds))

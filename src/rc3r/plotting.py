@@ -172,7 +172,7 @@ def estimate_figure(res, theta, title: str = "adaptive law: parameter estimate",
     Top: ``||theta_hat(t) - theta||`` (line 0) and ``||theta_hat(t) - theta_0||`` (line 1) [:data:`ESTIMATE_UNITS`]
     against t [s]. Bottom: ``|theta_hat_i - theta_i| / |theta_i|`` at t = 0 and at the end (bars, log
     scale). Legends sit outside the axes. ``theta`` is the *plant's* coefficient vector (the law
-    never sees it: ``RunSpec.plant.theta``); ``names`` labels the coefficients (default theta_1 ...).
+    never sees it: ``RunSpec.true_rigid.theta``); ``names`` labels the coefficients (default theta_1 ...).
     Data: :func:`estimate_errors`.
     """
     est = estimate_errors(res, theta)

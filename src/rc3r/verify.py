@@ -475,7 +475,7 @@ def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
     theta_hat = np.linalg.lstsq(Y_id, tau_id.reshape(-1), rcond=None)[0]
 
     notes = []
-    if getattr(robot, "model_terms_are_pinocchio", False):
+    if robot.model_terms_are_pinocchio:
         M_y, C_y, g_y = model_from_regressor(robot, th, Q, QD)
         checks = {"M_from_regressor_vs_crba": compare(M_y, ref["M"]),
                   "C_from_regressor_vs_coriolis": compare(C_y, ref["C"]),
@@ -498,7 +498,7 @@ def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
     })
     ratio, weak = identifiability(Y_id[: nj * MINIMALITY_STATES], tuple(robot.coefficient_names))
     return VerifyReport(
-        urdf=str(getattr(robot, "urdf", None) or robot.label),
+        urdf=str(robot.urdf or robot.label),
         theta=tuple(float(x) for x in th),
         checks=checks,
         warnings=tuple(robot.physical_issues()) + tuple(weak),
@@ -507,6 +507,6 @@ def verify_model(robot, samples: int = 1000, seed: int = 0) -> VerifyReport:
         seed=seed,
         robot=robot.name,
         notes=tuple(notes),
-        theta_order=getattr(robot, "theta_order", "the robot's coefficient order (coefficient_names)"),
+        theta_order=robot.theta_order,
         identifiability=ratio,
     )

@@ -1,7 +1,7 @@
 """One run of a campaign as data (:class:`Job`), and its execution on a worker (:func:`run_job`).
 
 A job is a handful of strings and numbers: it pickles cheaply for a process pool
-or a Dask worker, and the worker rebuilds the run with :func:`rc3r.study.build_run`
+or a Dask worker, and the worker rebuilds the run with :func:`rc3r.runspec.build_run`
 (the same path as ``rc3r run``). Its :attr:`Job.id` names the row it produces, so a
 resumed campaign skips what is done without duplicating a row.
 """
@@ -32,7 +32,7 @@ class Job:
     plant : int
         Plant id in the campaign (>= 0), or -1 for a named plant (``spec``).
     spec : str
-        Plant spec for :func:`rc3r.study.build_run` (``random:<seed>``, ``nominal`` ...).
+        Plant spec for :func:`rc3r.runspec.build_run` (``random:<seed>``, ``nominal`` ...).
     controller : str
         A registered law.
     eps : float or None
@@ -70,8 +70,8 @@ class Job:
         return f"{who}/{self.controller}/{eps}/{rate}" + (f"/{self.tag}" if self.tag else "")
 
     def build(self):
-        """The :class:`rc3r.study.RunSpec` of this job (``rate`` None runs in continuous time)."""
-        from ..study import build_run
+        """The :class:`rc3r.runspec.RunSpec` of this job (``rate`` None runs in continuous time)."""
+        from ..runspec import build_run
 
         return build_run(robot=self.robot, controller=self.controller, perturbed=True, plant=self.spec,
                          eps=self.eps, rate=0.0 if self.rate is None else self.rate,  # 0: continuous
@@ -102,11 +102,11 @@ def _bound(spec, res):
         lyapunov_margin(spec.law)
     except ValueError:
         return None, None
-    covered = covers(spec.law, spec.plant.theta)
+    covered = covers(spec.law, spec.true_rigid.theta)
     if res.mode != "continuous" or res.q.shape[0] == 0:
         return covered, None
     step = max(1, res.q.shape[0] // 200)
-    m_lo, m_hi = inertia_range(spec.plant, res.q[::step])
+    m_lo, m_hi = inertia_range(spec.true_rigid, res.q[::step])
     return covered, error_bound(spec.law, m_lo, m_hi, res.n)
 
 
@@ -118,7 +118,7 @@ def run_job(job: Job) -> tuple[dict, dict]:
     interrupted run raises ``KeyboardInterrupt`` (never a row: a resumed campaign runs it).
     """
     from ..simulate import file_status
-    from ..study import execute
+    from ..runspec import execute
 
     spec = job.build()
     res, m = execute(spec)
@@ -133,7 +133,7 @@ def run_job(job: Job) -> tuple[dict, dict]:
         "job": job.id, "plant": job.plant, "plant_seed": spec.seed if job.spec.startswith("random:") else None,
         "controller": job.controller, "eps": eps,
         "rate_hz": None if spec.options.rate is None else float(spec.options.rate),  # as simulated
-        "theta_dist": float(np.linalg.norm(spec.plant.theta - th0)), "rho": spec.model.get("rho"),
+        "theta_dist": float(np.linalg.norm(spec.true_rigid.theta - th0)), "rho": spec.model.get("rho"),
         "covered": covered, "status": file_status(res), "t_end": res.t_end,
         "max_error": float(e_max.max()), "final_error": float(np.max(m["final_error_bound"])),
         "rms_error": float(np.max(m["rms_error"])), "max_torque": float(np.max(m["max_abs_torque"])),

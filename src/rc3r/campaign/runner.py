@@ -354,7 +354,7 @@ def _dask(jobs, scheduler: str, grace: float):
 
 
 def prepare(spec) -> bool:
-    """Build the compiled integrator a :class:`rc3r.study.RunSpec`'s run would use if it were warm (numba compiles it, or loads
+    """Build the compiled integrator a :class:`rc3r.runspec.RunSpec`'s run would use if it were warm (numba compiles it, or loads
     it from its disk cache), by simulating two control periods on it; True if it did.
 
     Campaigns call it once before their jobs (``rc3r montecarlo``, ``sweep``, ``design``): each job alone
@@ -365,7 +365,7 @@ def prepare(spec) -> bool:
 
     from ..simulate import planned_engine, simulate
 
-    plant = spec.true_plant if spec.true_plant is not None else spec.plant
+    plant = spec.true_plant if spec.true_plant is not None else spec.true_rigid
     name, why = planned_engine(plant, spec.law, spec.options)
     if why is None:  # warm already, or no compiled engine can run it
         return False
@@ -374,7 +374,7 @@ def prepare(spec) -> bool:
     before = os.environ.get("RC3R_COLD_START")
     os.environ["RC3R_COLD_START"] = "compile"  # the law's and trajectory's kernels too
     try:
-        simulate(plant, spec.law, spec.trajectory, short, loop=spec.loop, model=spec.robot_model)
+        simulate(plant, spec.law, spec.trajectory, short, loop=spec.loop, model=spec.controller_model)
     finally:
         if before is None:
             os.environ.pop("RC3R_COLD_START", None)

@@ -80,7 +80,7 @@ def montecarlo_jobs(n: int, seed: int, controllers, *, eps=None, rate=None, dura
 def model_radii(job: Job) -> dict:
     """theta_0 and the radii of a campaign's model: ``rho`` (the run's, e.g. the paper's method (a))
     and ``rho_max`` (certified: the smallest rho around the same theta_0 that covers the whole box)."""
-    from ..study import build_run
+    from ..runspec import build_run
 
     cfg = json.loads(job.config)
     kw = dict(robot=job.robot, controller="robust", perturbed=True, plant="nominal", box=job.box,

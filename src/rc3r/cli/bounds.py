@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..io import floats as _floats
 from ..robots import DEFAULT_ROBOT, robot_class
-from ..study import resolve_box
+from ..runspec import resolve_box
 from ..uncertainty import certified_bounds, certified_radius, paper_bounds, sampled_rho_detail
 from . import EXIT
 
@@ -52,7 +52,7 @@ def _robot(args):
     """The nominal robot: ``--robot`` (default the paper's arm) or ``--urdf`` (the 3R's closed form when
     the URDF is that arm, else any serial arm through Pinocchio), with ``--lock``."""
     from ..errors import UrdfError
-    from ..study import _nominal
+    from ..runspec import _nominal
 
     urdf, name = getattr(args, "urdf", None), getattr(args, "robot", None)
     lock = dict(args.lock) if getattr(args, "lock", None) else None
@@ -75,8 +75,8 @@ def _payload(args, robot) -> int:
     with np.errstate(all="ignore"):
         b = payload_bounds(robot, (lo, hi), com)
         rho, rho_i = certified_radius(b, b.theta0)
-    out = {"nominal": {"robot": getattr(robot, "robot_name", robot.name), "urdf": getattr(robot, "urdf", None),
-                       "locked": dict(getattr(robot, "locked", {}) or {}), "n": robot.n, "p": robot.p,
+    out = {"nominal": {"robot": robot.robot_name or robot.name, "urdf": robot.urdf,
+                       "locked": dict(robot.locked or {}), "n": robot.n, "p": robot.p,
                        "theta": _floats(robot.theta)},
            "payload": {"mass": [lo, hi], "com": _floats(com)},
            "theta0": _floats(b.theta0), "rho": float(rho), "rho_i": _floats(rho_i),

@@ -124,7 +124,7 @@ def cmd_design(args) -> int:
     from ..design.verify import design_config, verify_design
     from ..campaign.runner import prepare
     from ..io import read_config
-    from ..study import build_run
+    from ..runspec import build_run
     from .run import announce_compile, plant_options
 
     if args.scheduler is not None and args.workers is not None:
@@ -154,16 +154,16 @@ def cmd_design(args) -> int:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     command = "rc3r " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:2] == ["design"] else ""
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
-    print(f"rc3r design: {first.plant.n}-joint arm '{first.robot_model.label}', {args.rate:g} Hz (margin "
+    print(f"rc3r design: {first.true_rigid.n}-joint arm '{first.controller_model.label}', {args.rate:g} Hz (margin "
           f"{args.margin:g}), {args.n} random plants, {first.options.duration:g} s each, on {where} -> {out}/",
           file=sys.stderr)
-    announce_compile(first.plant, float(args.rate))
+    announce_compile(first.true_rigid, float(args.rate))
     prepare(first)  # compile once here: the jobs alone are short enough to pass a cold engine over
     t0 = time.perf_counter()
     with output_dir(out, own=DESIGN_ENTRIES) as tmp:
         bar = _Bar()
         try:
-            with RunTable(tmp / "runs.csv", columns(first.plant.n)).open(resume=False) as table:
+            with RunTable(tmp / "runs.csv", columns(first.true_rigid.n)).open(resume=False) as table:
                 res = verify_design(cfg, float(args.rate), table=table, margin=args.margin, n=args.n,
                                     seed=args.seed, workers=args.workers, scheduler=args.scheduler, progress=bar)
         finally:

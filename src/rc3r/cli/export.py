@@ -19,14 +19,14 @@ def cmd_export(args) -> int:
     from ..export.harness import FILES, write_export
     from ..provenance import provenance
     from ..io import read_config
-    from ..study import build_run
+    from ..runspec import build_run
     from ._output import check_output_path, output_dir
     from .run import plant_options
 
     cfg = read_config(args.config)
     spec = build_run(robot=args.robot, controller=args.controller, rate=args.rate, eps=args.eps, config=cfg,
                      **plant_options(args))
-    from ..study import design_unverified, design_warning
+    from ..runspec import design_unverified, design_warning
 
     warning = design_warning(cfg)
     if warning is not None and not args.force:

@@ -100,7 +100,7 @@ def add_parsers(sub, positive, lock, urdf=str) -> None:
 
 
 def _robot(args):
-    from ..study import _nominal
+    from ..runspec import _nominal
 
     lock = dict(args.lock) if args.lock else None
     return _nominal(args.robot, args.urdf, lock)
@@ -162,7 +162,7 @@ def cmd_identify(args) -> int:
         atomic_savefig(residual_figure(res), tmp / "residuals.png", dpi=110)
     v, f = res.validation, res.filter
     print(f"identified {robot.p} coefficients + {len(res.friction_kinds) * robot.n} friction terms of "
-          f"{getattr(robot, 'robot_name', robot.name)} from {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s")
+          f"{robot.robot_name or robot.name} from {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s")
     sel = res.selection
     if sel is not None:
         c, rows = sel["chosen"], sel["candidates"]
@@ -266,7 +266,7 @@ def cmd_excite(args) -> int:
     robot = _robot(args)
     lim = limits_of(robot, args.max_velocity, args.max_acceleration)
     _note(f"rc3r excite: {args.harmonics} harmonics per joint over {args.duration:g} s for "
-          f"{getattr(robot, 'robot_name', robot.name)}, "
+          f"{robot.robot_name or robot.name}, "
           f"seed {args.seed} (SLSQP, {args.starts} start(s)) ...")
     ex = excite(robot, args.duration, seed=args.seed, harmonics=args.harmonics, limits=lim, starts=args.starts,
                 check_rate=args.rate)

@@ -118,7 +118,7 @@ def cmd_verify_model(args) -> int:
             raise ConfigError(f"{'--generic' if args.generic else '--lock'} needs --urdf PATH")
         robot = load_urdf_robot(args.urdf, lock=lock)
     elif lock:
-        from ..study import _nominal
+        from ..runspec import _nominal
 
         robot = _nominal(args.robot, args.urdf, lock)
     elif args.robot:

@@ -15,7 +15,7 @@ from ..robots import DEFAULT_ROBOT, robot_class
 from ..simulate._fast import simulator
 from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
-from ..study import build_run, execute
+from ..runspec import build_run, execute
 from . import EXIT
 from ._output import check_output_path, output_dir
 
@@ -30,9 +30,9 @@ def announce_compile(plant, rate=False) -> None:
     the UR5 chain engine (2026-12-02))."""
     eng = simulator(plant)
     which = None if rate is False else ("continuous" if rate is None else "sampled")  # False: both modes
-    if eng is not None and not getattr(eng, "is_cached", lambda which=None: True)(which):
+    if eng is not None and not eng.is_cached(which):
         small = {"continuous": "about 35 s", "sampled": "about 20 s"}.get(which, "about a minute")
-        what = small if getattr(plant, "n", 0) <= 3 else "1-2 minutes for a 6-joint arm"
+        what = small if plant.n <= 3 else "1-2 minutes for a 6-joint arm"
         _progress(f"rc3r: compiling the simulator's kernels (numba): {what}, once; cached on disk afterwards")
 
 
@@ -49,7 +49,7 @@ def announce_engine(spec) -> str | None:
     error line of a run that diverged (``rc3r run``)."""
     from ..simulate import default_substeps, plant_method, planned_engine, stiffness
 
-    plant = spec.true_plant if spec.true_plant is not None else spec.plant
+    plant = spec.true_plant if spec.true_plant is not None else spec.true_rigid
     opt = spec.options
     if opt.rate is not None and opt.nsub is None:
         lam = stiffness(plant)
@@ -69,7 +69,7 @@ def announce_engine(spec) -> str | None:
         return (f"rc3r: python engine: the compiled one is passed over, {why}; a run of over "
                 f"{COLD_MAX_SUBSTEPS} sub-steps, --engine fast or RC3R_COLD_START=compile builds it (once)")
     if name == "fast":
-        announce_compile(spec.plant, spec.options.rate)
+        announce_compile(spec.true_rigid, spec.options.rate)
     return None
 
 
@@ -107,14 +107,14 @@ def plant_options(args) -> dict:
 def describe_model(spec) -> str:
     """What the plant is and what the controller knows of it, for the run's announcement.
 
-    The plant is the true robot (``spec.plant.label``, "the nominal robot" when it is that one);
+    The plant is the true robot (``spec.true_rigid.label``, "the nominal robot" when it is that one);
     the controller's model is theta_0 and rho with the short form of their sources
     (``spec.model``), or the plant's own theta in an ideal run. A perturbed run's perturbation is
     in the controller's model, not in the plant.
     """
     model = spec.model
-    plant = f"plant '{spec.plant.label}'"
-    if spec.plant.label == model.get("nominal"):
+    plant = f"plant '{spec.true_rigid.label}'"
+    if spec.true_rigid.label == model.get("nominal"):
         plant += " (the nominal robot)"
     if spec.scenario != "perturbed" and (model.get("theta_source") or "").startswith("theta of the plant"):
         return f"{plant}; controller model = the plant's theta (ideal)"
@@ -129,11 +129,11 @@ def describe_model(spec) -> str:
 
 def _effects_text(spec) -> str:
     """``; plant effects: friction (urdf), saturation (urdf); loop: noise, delay 2`` or ``""``."""
-    plant, loop = getattr(spec, "true_plant", None), getattr(spec, "loop", None)
+    plant, loop = spec.true_plant, spec.loop
     parts = []
     if plant is not None:
-        fx = [f"{e.name} ({getattr(e, 'source', 'config')})" for e in plant.effects]
-        rigid = getattr(plant.rigid, "engine_name", None) or ("mujoco" if hasattr(plant.rigid, "advance") else None)
+        fx = [f"{e.name} ({e.source})" for e in plant.effects]
+        rigid = plant.rigid.name if plant.rigid.advance is not None else None  # a rigid body stepping itself: MuJoCo
         if fx:
             parts.append("plant effects: " + ", ".join(fx))
         if rigid:
@@ -166,8 +166,8 @@ def cmd_run(args) -> int:
     if fmt:
         from ..animation import check_animatable, frame_count
 
-        check_animatable(spec.plant, fmt)  # before anything is announced or simulated
-    from ..study import design_warning
+        check_animatable(spec.true_rigid, fmt)  # before anything is announced or simulated
+    from ..runspec import design_warning
 
     warning = design_warning(cfg)
     if warning:
@@ -216,20 +216,20 @@ def _estimate(spec, res, m: dict):
     figure (``None`` for the other laws)."""
     from ..controllers import Adaptive
 
-    if not isinstance(spec.law, Adaptive) or res.z.shape[1] != spec.plant.p or res.t.size == 0:
+    if not isinstance(spec.law, Adaptive) or res.z.shape[1] != spec.true_rigid.p or res.t.size == 0:
         return None
     from ..plotting import ESTIMATE_UNITS, estimate_errors, estimate_figure
 
-    est = estimate_errors(res, spec.plant.theta)
+    est = estimate_errors(res, spec.true_rigid.theta)
     m["parameter_estimate"] = {
         "definition": "theta_hat(t) = the adaptive law's state; theta = the plant's coefficients (unknown to the law)",
         "units": ESTIMATE_UNITS,
         "error_initial": float(est["error"][0]), "error_final": float(est["error"][-1]),
         "error_min": float(est["error"].min()), "moved_max": float(est["moved"].max()),
-        "theta_hat_final": [float(x) for x in res.z[-1]], "theta_plant": [float(x) for x in spec.plant.theta],
+        "theta_hat_final": [float(x) for x in res.z[-1]], "theta_plant": [float(x) for x in spec.true_rigid.theta],
     }
-    return estimate_figure(res, spec.plant.theta, f"{spec.name}: adaptive estimate on plant '{spec.plant.label}'",
-                           names=spec.plant.coefficient_names if spec.plant.p > 15 else None)
+    return estimate_figure(res, spec.true_rigid.theta, f"{spec.name}: adaptive estimate on plant '{spec.true_rigid.label}'",
+                           names=spec.true_rigid.coefficient_names if spec.true_rigid.p > 15 else None)
 
 
 def _animate(spec, res, m: dict, path: Path, out: Path) -> bool:
@@ -238,7 +238,7 @@ def _animate(spec, res, m: dict, path: Path, out: Path) -> bool:
 
     _progress(f"rc3r run: writing the animation {out}/{path.name} ...")
     try:
-        frames = write_animation(res, spec.plant, path, title=f"rc3r run {spec.name}")
+        frames = write_animation(res, spec.true_rigid, path, title=f"rc3r run {spec.name}")
     except KeyboardInterrupt:
         return False
     m["animation"] = {"file": path.name, "frames": int(frames.t.size), "fps": frames.fps,
@@ -319,7 +319,7 @@ def _theory_figures(res: dict, out: Path, mode: str, label: str) -> None:
 def _paper(paper, out: Path) -> int:
     from ..plotting import plot_error_comparison
 
-    announce_compile(paper.scenarios(duration=0.01)[0].plant)
+    announce_compile(paper.scenarios(duration=0.01)[0].true_rigid)
     t_start = time.perf_counter()
     rows, results = [], {}
     for mode, rate in (("continuous", None), ("sampled", paper.PAPER_SAMPLED_RATE)):

@@ -62,7 +62,7 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
         raise ConfigError("give --workers or --scheduler, not both")
     grace = _dask_grace()
     first = jobs[0].build()  # bad input (box, robot, gains, config) refused here, before any worker starts
-    n = first.plant.n
+    n = first.true_rigid.n
     with locked(out):
         meta_path = out / "campaign.json"
         request = dict(request, kind=kind, jobs=len(jobs))
@@ -91,7 +91,7 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
                 print(f"rc3r {kind}: {table.dropped} incomplete row(s) of {out}/runs.csv dropped; they run again",
                       file=sys.stderr)
             print(f"rc3r {kind}: {len(jobs)} runs, {done} already done, on {where} -> {out}/", file=sys.stderr)
-            announce_compile(first.plant, first.options.rate)
+            announce_compile(first.true_rigid, first.options.rate)
             prepare(first)  # compile once here: the jobs alone are short enough to pass a cold engine over
             bar = _progress_bar(len(jobs), done, kind)
             t0 = time.perf_counter()
@@ -158,7 +158,7 @@ def cmd_montecarlo(args) -> int:
     """``rc3r montecarlo``: every controller on N plants drawn from the box."""
     from ..campaign.figures import error_distribution, error_vs_distance
 
-    from ..study import design_warning
+    from ..runspec import design_warning
 
     cfg = _config(args)
     if args.controllers is None:  # a design.toml's recommended law, and FBL beside it

@@ -259,6 +259,8 @@ class Law:
     #: True for a law with a boundary layer (a gain ``rho / eps``): continuous runs use RODAS
     #: (:func:`rc3r.simulate.continuous_method`).
     stiff = False
+    #: The scheduled inertia gain b of ``K(q) = K + b M(q)`` (0: none; the sliding laws make it a field).
+    K_inertia = 0.0
     #: The module holding the law's kernels, LAYOUT and C port (set by :func:`register_law`).
     kernels = None
 
@@ -319,7 +321,7 @@ class Law:
         if Y.shape != (q.size, self.p):
             raise ParameterError(f"law {self.name!r} has {self.p} coefficients, the robot's regressor "
                                  f"is {Y.shape}")
-        b = float(getattr(self, "K_inertia", 0.0))
+        b = float(self.K_inertia)
         if b > 0.0:  # K(q) = K + b M(q): M(q) r = Y(q, 0, 0, r) theta - Y(q, 0, 0, 0) theta (the law's theta)
             zero = np.zeros(q.size)
             w = w - b * ((robot.regressor(q, zero, zero, r) - robot.regressor(q, zero, zero, zero)) @ self.theta)

@@ -12,7 +12,8 @@ command :math:`u_{k-d}` (:math:`u_0` while :math:`k < d`) until :math:`t_{k+1}`.
 rate every call computes a fresh torque and integrates the state by forward Euler between
 calls (a continuous controller as seen by a fine-stepping caller).
 
-``examples/external_loop.py`` drives a plant rc3r does not simulate and reproduces
+The hold, the delay line and the Euler step are :class:`rc3r.controllers.sampled.SampledLoop`, the
+same object the ``python`` engine samples with. ``examples/external_loop.py`` drives a plant rc3r does not simulate and reproduces
 ``rc3r run`` of the same specification.
 """
 from __future__ import annotations
@@ -20,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
+from .sampled import SampledLoop
 
 __all__ = ["Controller"]
 
@@ -61,32 +63,42 @@ class Controller:
         self.law, self.model, self.trajectory = law, model, trajectory
         self.rate, self.delay = rate, int(delay)
         self._finite = np.empty(2 * model.n + 1)
+        self._loop = SampledLoop(law, None if rate is None else 1.0 / rate, self.delay)
         self.reset()
 
     @classmethod
     def from_run(cls, spec) -> "Controller":
         """The controller of a run specification (:func:`rc3r.build_run`): its law, model, trajectory,
         rate and loop delay."""
-        loop = getattr(spec, "loop", None)
-        model = getattr(spec, "robot_model", None) or spec.plant
-        model = getattr(model, "rigid", model)
-        return cls(spec.law, model, spec.trajectory, spec.options.rate, loop.delay if loop is not None else 0)
+        model = spec.controller_model if spec.controller_model is not None else spec.true_rigid
+        return cls(spec.law, model, spec.trajectory, spec.options.rate, 0 if spec.loop is None else spec.loop.delay)
 
     def reset(self) -> None:
         """Back to t = 0: the law's initial state, an empty hold and delay line."""
-        self.z = self.law.initial_state().copy()
-        self._zdot = np.zeros_like(self.z)
-        self._k = -1          # last sample computed
+        self._loop.reset()
         self._t_last = None   # continuous: time of the last call
-        self._line: list = []
         self.u = None
-        self.diagnostic = 0.0
 
-    def _torque(self, t, q, qd):
+    @property
+    def z(self) -> np.ndarray:
+        """The law's state (the adaptive estimate), as of the last sample (or call, continuous); settable (a
+        warm start), as before it lived in the shared loop."""
+        return self._loop.z
+
+    @z.setter
+    def z(self, value) -> None:
+        self._loop.z = np.array(value, dtype=float)
+
+    @property
+    def diagnostic(self) -> float:
+        """The law's third output at the last sample (``||Y^T r||`` for the laws here)."""
+        return self._loop.diagnostic
+
+    def _torque(self, t, q, qd, z):
         qd_ref = np.empty((3, self.model.n))
         pos, vel, acc = self.trajectory.evaluate(float(t))
         qd_ref[0], qd_ref[1], qd_ref[2] = pos, vel, acc
-        u, zdot, diag = self.law.torque(self.model, q, qd, qd_ref, self.z)
+        u, zdot, diag = self.law.torque(self.model, q, qd, qd_ref, z)
         return np.asarray(u, dtype=float), np.asarray(zdot, dtype=float), float(diag)
 
     @staticmethod
@@ -125,25 +137,19 @@ class Controller:
         buf[0], buf[1:self.model.n + 1], buf[self.model.n + 1:] = t, q, qd
         if not np.isfinite(buf).all():
             raise ParameterError(self._which_bad(t, q, qd, "is NaN or infinite"))
+        loop = self._loop
         if self.rate is None:
             if self._t_last is not None:
                 if t < self._t_last:
                     raise ParameterError(f"controller called at t = {t} after t = {self._t_last}")
-                self.z = self.z + (t - self._t_last) * self._zdot
-            self.u, self._zdot, self.diagnostic = self._torque(t, q, qd)
+                loop.euler(t - self._t_last)
+            self.u = loop.evaluate(self._torque, t, q, qd)
             self._t_last = t
             return self.u
-        T = 1.0 / self.rate
+        T = loop.period
         k = int(np.floor(t / T + 1e-9))
-        if k < self._k:
-            raise ParameterError(f"controller called at t = {t} s, before its last sample {self._k * T} s")
-        if k > self._k:
-            if self._k >= 0:
-                self.z = self.z + T * self._zdot  # forward Euler over one period, as the simulator
-            ucmd, self._zdot, self.diagnostic = self._torque(k * T, q, qd)
-            self._line.append(ucmd)
-            if len(self._line) > self.delay + 1:
-                self._line.pop(0)
-            self.u = self._line[0]
-            self._k = k
+        if k < loop.k:
+            raise ParameterError(f"controller called at t = {t} s, before its last sample {loop.k * T} s")
+        if k > loop.k:
+            self.u = loop.sample(k, self._torque, q, qd)  # the simulator's own sampled loop
         return self.u

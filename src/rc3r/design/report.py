@@ -60,7 +60,7 @@ def design_table(result) -> dict:
     rec = result.recommendation()
     out = {"verified": bool(result.ok), "law": rec["law"] if rec is not None else "robust",
            "rate": float(result.rate), "margin": float(result.margin)}
-    worst = getattr(result, "worst", None) or {}
+    worst = result.worst or {}
     w = worst.get(out["law"])
     if w:
         out["worst_plant"] = str(w["spec"])
@@ -283,7 +283,7 @@ def _not_clean(result, law: str, w: dict) -> str:
 
 def _b_note(result) -> str:
     """Why b is below the fast form's (the held loop of K on the hardest plant), or nothing."""
-    b = getattr(result, "b_note", None)
+    b = result.b_note
     if not b:
         return ""
     return (f" (b lowered from {b['b']:.4g}: on the hardest plant `{_short(b['plant'])}` max lambda_max(M_p^-1 K / b) = "
@@ -298,7 +298,7 @@ def _urdf_line(result) -> str:
     spec = parse_spec(result.config.get("plant", {}).get("urdf_uncertainty"))
     if spec is None:
         return "none (the plants are the bounds' own; --urdf-uncertainty SPEC adds it)."
-    text = getattr(result, "urdf", None) or f"spec '{spec}'"
+    text = result.urdf or f"spec '{spec}'"
     return (f"{text}; beyond the bounds (which trust the URDF): the random plants draw it, the search visits its "
             "lightest and heaviest plants (docs/design.md, 'URDF uncertainty'; --urdf-uncertainty off turns it off).")
 

@@ -48,7 +48,7 @@ of oscillation at ``rate / margin`` (period :math:`T' = mT`). It takes
 * FBL: :math:`K_p = \Lambda^2`, :math:`K_d = 2\Lambda` (critically damped at the same bandwidth); PD:
   :math:`K_d = 2\Lambda\kappa`, :math:`K_p = \Lambda^2\kappa`, lowered until :math:`T' L_{K_d} \le a_d/4`.
 
-:func:`sampled_gains` is the "defaults that work" of :func:`rc3r.study.build_run`: the law's default
+:func:`sampled_gains` is the "defaults that work" of :func:`rc3r.runspec.build_run`: the law's default
 gains when :func:`check` passes them, else the fast form's.
 """
 from __future__ import annotations
@@ -365,7 +365,7 @@ _CACHE: dict = {}
 
 def sampled_gains(kind: str, robot, trajectory, model: dict, rate: float, *, delay: int = 0,
                   duration: float = 10.0, margin: float = DEFAULT_MARGIN):
-    """The gains of ``kind`` for a sampled run without user gains (:func:`rc3r.study.build_run`'s hook).
+    """The gains of ``kind`` for a sampled run without user gains (:func:`rc3r.runspec.build_run`'s hook).
 
     Returns ``(gains, note)``: the law's defaults (``gains = {}``) when :func:`check` passes them at
     ``rate / margin``, else the fast form's gains for that margin (by default ``rc3r design``'s, 2:
@@ -380,7 +380,7 @@ def sampled_gains(kind: str, robot, trajectory, model: dict, rate: float, *, del
     rho, rho_i = model.get("rho"), model.get("rho_i")
     if kind == "robust-coeff" and rho_i is None:
         return None, None
-    key = (kind, getattr(robot, "label", ""), getattr(robot, "urdf", None), robot.n, robot.p,
+    key = (kind, robot.label, robot.urdf, robot.n, robot.p,
            np.asarray(robot.theta, float).tobytes(), trajectory.pack().tobytes(), float(rate), int(delay),
            float(duration), float(margin), rho, None if rho_i is None else tuple(rho_i),
            tuple(model.get("theta0") or ()))

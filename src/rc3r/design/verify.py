@@ -1,7 +1,7 @@
 r"""The rule's fast form verified by simulation over the bounds, at the rate and at rate / margin.
 
 :func:`verify_design` takes a run configuration (the arm, its bounds, the plant effects, the
-trajectory: what :func:`rc3r.study.build_run` reads) and a controller rate, and
+trajectory: what :func:`rc3r.runspec.build_run` reads) and a controller rate, and
 
 1. computes the fast form (:func:`rc3r.design.rule.fast_design`) on the controller's own model (theta_0's M,
    :func:`controller_model`), its bandwidth b capped so that K alone uses at most :data:`K_SET_SHARE` of the
@@ -263,7 +263,7 @@ class DesignResult:
 
 def _resolve(cfg: dict, rate: float):
     """The controller's model, trajectory and bounds of the configuration (no simulation)."""
-    from ..study import build_run
+    from ..runspec import build_run
 
     spec = build_run(controller="robust", config=cfg, rate=rate, eps=1.0)  # eps given: no defaults hook
     rho_i = None
@@ -281,9 +281,9 @@ def controller_model(spec):
 
     theta0 = spec.model.get("theta0")
     if theta0 is None:
-        return ThetaModel(spec.robot_model, spec.robot_model.theta, f"theta of {spec.robot_model.label}")
+        return ThetaModel(spec.controller_model, spec.controller_model.theta, f"theta of {spec.controller_model.label}")
     src = spec.model.get("theta_source") or "theta_0"
-    return ThetaModel(spec.robot_model, theta0, f"the controller's theta_0 ({src})")
+    return ThetaModel(spec.controller_model, theta0, f"the controller's theta_0 ({src})")
 
 
 def start_eps(design, sp, rate: float, margin: float, rho: float) -> float:
@@ -421,7 +421,7 @@ def verify_design(cfg: dict, rate: float, *, table, margin: float = 2.0, n: int 
                                                                if spec.model.get("bounds_file") else None)},
                        spectrum={"m_min": sp.m_min, "m_max": sp.m_max, "L_Y": sp.lam_yy(), "samples": int(sp.t.size),
                                  "minv_diag_max": sp.minv_diag_max.tolist()},
-                       effort_limit=_effort(spec.robot_model))
+                       effort_limit=_effort(spec.controller_model))
     run = _Runner(cfg, table, duration, workers, scheduler, progress)
     sliding = {k: v for k, v in design.gains("robust").items() if k in ("K", "Lambda", "K_inertia")}
     low = rate / margin

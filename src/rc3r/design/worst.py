@@ -374,34 +374,34 @@ class Hardest:
         from ..uncertainty.urdf import URDFSet, parse_spec
 
         self.rate, self.delay = float(rate), int(delay)
-        self.search = Search(spec.robot_model, sp, spec.trajectory)
+        self.search = Search(spec.controller_model, sp, spec.trajectory)
         self.kind, self.box, self.ends, self.suffix = "off", None, {}, ""
         self.masses: dict = {}  # spec -> M_p (N, n, n) of the plants the last search returned
         self._found: list = []
         u = parse_spec(cfg.get("plant", {}).get("urdf_uncertainty"))
-        self.urdf = URDFSet(spec.robot_model, u) if u is not None else None
+        self.urdf = URDFSet(spec.controller_model, u) if u is not None else None
         if cfg.get("payload"):
             from ..plant_sets import _payload, _payload_plant
 
             pay = _payload(cfg["payload"]["mass"], cfg["payload"].get("com"))
             self.kind = "payload"
             ends = ("lower", "upper") if self.urdf is None else ("lower+urdf-lower", "upper+urdf-upper", "lower")
-            self.ends = {e: _payload_plant(spec.robot_model, pay, e, self.urdf).theta for e in ends}
+            self.ends = {e: _payload_plant(spec.controller_model, pay, e, self.urdf).theta for e in ends}
             if self.urdf is not None:
                 self.kind = "payload + URDF uncertainty"
         elif cfg.get("bounds"):  # the identified ellipsoid: its lightest points along the worst directions
             from ..identify.bounds_file import load_bounds
             from ..plant_sets import _bounds_plant
 
-            bf = load_bounds(cfg["bounds"], robot=spec.robot_model)
+            bf = load_bounds(cfg["bounds"], robot=spec.controller_model)
             self.kind = "ellipsoid"
-            self.realise = lambda s: _bounds_plant(spec.robot_model, bf, s)  # the plants a run of the bounds draws
+            self.realise = lambda s: _bounds_plant(spec.controller_model, bf, s)  # the plants a run of the bounds draws
             self.pool = [(f"boundary:{k}", self.search.mass(self.realise(f"boundary:{k}").theta))
                          for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
         else:
             from ..plant_sets import resolve_box
 
-            self.kind, self.box = "box", resolve_box(spec.robot_model, cfg.get("box"))
+            self.kind, self.box = "box", resolve_box(spec.controller_model, cfg.get("box"))
             if self.urdf is not None:  # the box's corners around the arm's lightest plant
                 self.kind, self.suffix = "box + URDF uncertainty", "+urdf-lower"
                 self.search = Search(self.urdf.end("lower"), sp, spec.trajectory)

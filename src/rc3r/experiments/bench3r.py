@@ -345,7 +345,7 @@ def _sim_row(spec, res, walls, execute_s) -> dict:
 
 
 def _run(spec, repeats: int):
-    from ..study import execute
+    from ..runspec import execute
 
     walls = []
     for _ in range(repeats):
@@ -357,7 +357,7 @@ def _run(spec, repeats: int):
 
 
 def bench_sims(duration: float, repeats: int, reference: bool) -> dict:
-    from ..study import build_run, execute
+    from ..runspec import build_run, execute
     from .paper3r import scenarios as paper_scenarios
 
     # warm-up: compile or load every integrator/law combination used below

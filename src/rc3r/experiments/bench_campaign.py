@@ -30,7 +30,7 @@ def bench_throughput(n_plants: int = 100, duration: float = 10.0, workers=(1, 2)
     jobs = montecarlo_jobs(n_plants, seed, ["fbl", "robust"], duration=duration, robot=robot, config=config)
     run_job(montecarlo_jobs(1, seed, ["robust"], duration=0.01, robot=robot, config=config)[0])  # kernels loaded
     # before forking
-    n = jobs[0].build().plant.n
+    n = jobs[0].build().true_rigid.n
     out = {"n_plants": n_plants, "runs": len(jobs), "duration_s": duration, "controllers": ["fbl", "robust"],
            "seed": seed, "robot": robot or "rr3", "config": config or {}, "workers": {}}
     for k in workers:

@@ -30,7 +30,7 @@ GENERIC_TARGETS = {
 def bench_generic(quick: bool = False, progress=None) -> dict:
     """Measure the generic-robot targets; returns ``{"regressor": {...}, "runs": {...}, "targets": {...}}``."""
     from ..simulate import file_status
-    from ..study import build_run, execute
+    from ..runspec import build_run, execute
     from ..robots import load_robot
 
     say = progress or (lambda msg: None)
@@ -113,11 +113,11 @@ def bench_regressor(robot, n: int = 2000, seed: int = 0, repeat: int = 3) -> dic
     def loop(fn):
         return lambda: [fn(*x) for x in zip(Q, QD, V, A)]
 
-    out = {"robot": getattr(robot, "robot_name", robot.name), "n": robot.n, "p": robot.p, "states": n,
+    out = {"robot": robot.robot_name or robot.name, "n": robot.n, "p": robot.p, "states": n,
            "regressor_us": best(lambda: robot.regressor(Q, QD, V, A)),
            "regressor_single_us": best(loop(robot.regressor)),
            "rnea_us": best(loop(lambda q, qd, v, a: pin.rnea(model, data, q, qd, a)))}
-    if hasattr(robot, "regressor_pinocchio"):
+    if robot.regressor_pinocchio is not None:
         out["pinocchio_path_us"] = best(lambda: robot.regressor_pinocchio(Q, QD, V, A))
     out["ratio"] = out["regressor_us"] / out["rnea_us"]
     # what was timed computes the right thing: Y(q, qd, qd, a) theta = rnea(q, qd, a) at every state

@@ -35,7 +35,7 @@ def _scipy(spec, x0, t_out, method: str, rtol: float, atol: float):
     from ..plants import as_plant
     from ..simulate._fast import simulator
 
-    p = spec.plant
+    p = spec.true_rigid
     cp, tp, code = spec.law.pack(p.n), spec.trajectory.pack(), int(spec.law.code)
     eng = simulator(p)
     _rhs = eng.instance.closed_loop_xdot
@@ -54,8 +54,8 @@ def _rosenbrock(spec, jac_reuse: int, method: str = "ode23s"):
     from ..simulate import simulate
 
     opts = replace(spec.options, jac_reuse=jac_reuse, engine="fast", method=method)
-    simulate(spec.plant, spec.law, spec.trajectory, replace(opts, duration=0.01))  # warm
-    res = simulate(spec.plant, spec.law, spec.trajectory, opts)
+    simulate(spec.true_rigid, spec.law, spec.trajectory, replace(opts, duration=0.01))  # warm
+    res = simulate(spec.true_rigid, spec.law, spec.trajectory, opts)
     return res.q, res.wall_time_s, res.rhs_evals, res.ok
 
 
@@ -63,7 +63,7 @@ def bench_integrators(duration: float = 10.0, progress=None) -> dict:
     """Rosenbrock ode23s and ROS4 (J every step / kept 5 steps) and RODAS vs SciPy Radau and BDF on the FBL and
     robust perturbed runs."""
     from ..simulate import _initial_state, continuous_method
-    from ..study import build_run
+    from ..runspec import build_run
 
     report = progress or (lambda msg: None)
     out = {}

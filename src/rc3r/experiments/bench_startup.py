@@ -32,7 +32,7 @@ _COMPILE_SCRIPT = r"""
 import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
-import rc3r.robots.rr3.regressor as reg, rc3r.study as S
+import rc3r.robots.rr3.regressor as reg, rc3r.runspec as S
 t1 = time.perf_counter()
 z = np.zeros((4, 3))
 reg.inverse_dynamics(np.ones(15), z, z, z, l2=0.5)
@@ -56,7 +56,7 @@ def _clean_env(**extra) -> dict:
 
 def bench_compile() -> dict:
     """Cold (empty NUMBA_CACHE_DIR) vs warm (same dir) start, each a fresh interpreter."""
-    out = {"script": "import rc3r.robots.rr3.regressor, rc3r.study; inverse_dynamics on 4 states; "
+    out = {"script": "import rc3r.robots.rr3.regressor, rc3r.runspec; inverse_dynamics on 4 states; "
                      "robust-perturbed 0.1 s continuous; fbl-perturbed 0.1 s sampled 1 kHz"}
     cache = tempfile.mkdtemp(prefix="rc3r-numba-cache-")
     try:

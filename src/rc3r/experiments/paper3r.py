@@ -35,8 +35,8 @@ SCENARIOS = (
 
 
 def scenarios(duration: float | None = None, rate: float | None = None) -> list:
-    """The five scenarios as resolved runs (:class:`rc3r.study.RunSpec`), continuous or sampled at ``rate``."""
-    from ..study import build_run
+    """The five scenarios as resolved runs (:class:`rc3r.runspec.RunSpec`), continuous or sampled at ``rate``."""
+    from ..runspec import build_run
 
     return [build_run(robot="rr3", controller=law, perturbed=pert, eps=eps, duration=duration, rate=rate,
                       name=name, config={"controller": dict(PAPER_GAINS[law])})

@@ -57,17 +57,13 @@ def regressor_source(model) -> str:
     ConfigError
         A robot with neither (a helical joint, a robot class without a C regressor).
     """
-    own = getattr(model, "c_regressor_source", None)
-    if callable(own):
-        return own()
-    from ..robots.pinocchio_kernel import ChainKernel
+    if model.c_regressor_source is not None:  # declared by every robot (rc3r.robots.base.Robot)
+        return model.c_regressor_source()
     from .chain import chain_source
 
-    kernel = getattr(model, "kernel", None)
-    columns = getattr(model, "_columns", None)
-    if isinstance(kernel, ChainKernel) and kernel.supported and columns is not None:
-        return chain_source(kernel, columns)
-    raise ConfigError(f"robot {getattr(model, 'label', model)!r} has no C regressor (a class with "
+    if model.kernel is not None and model.kernel.supported and model.base is not None:
+        return chain_source(model.kernel, np.ascontiguousarray(model.base.independent, dtype=np.int64))
+    raise ConfigError(f"robot {model.label!r} has no C regressor (a class with "
                       "c_regressor_source(), or a serial arm of revolute/prismatic joints through Pinocchio)")
 
 

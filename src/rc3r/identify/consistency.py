@@ -71,9 +71,8 @@ def standard_map(robot, seed: int = 0, states: int | None = None) -> np.ndarray:
     ConfigError
         ``Y T`` does not reproduce ``W`` to 1e-8 (theta is not linear in the standard parameters).
     """
-    base = getattr(robot, "base", None)
-    if base is not None and getattr(base, "T", None) is not None:
-        return np.asarray(base.T, dtype=float)
+    if robot.base is not None:  # declared by every robot (rc3r.robots.base.Robot.base)
+        return np.asarray(robot.base.T, dtype=float)
     import pinocchio as pin
 
     model = robot.model

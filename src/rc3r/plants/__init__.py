@@ -1,6 +1,7 @@
 """Plants: the true system under a controller (:mod:`.base`), its effects, and the loop between.
 
-* :class:`Plant` -- a rigid body (:class:`~rc3r.robots.base.Robot`) and effects;
+* :class:`Plant` -- a rigid body (:class:`RigidBody`, :mod:`.rigid`: a
+  :class:`~rc3r.robots.base.Robot` or MuJoCo's) and effects;
 * :class:`Friction` (:mod:`.friction`), :class:`Saturation` (:mod:`.saturation`),
   :class:`Stribeck` (:mod:`.stribeck`), :class:`JointLimits` (:mod:`.limits`, a monitor) -- the
   registered effects (:data:`EFFECTS`), each one module from its class to its compiled kernels;
@@ -27,8 +28,9 @@ from .saturation import Saturation
 from .limits import JointLimits, crossings  # noqa: I001 - registration order, not the alphabet
 from .stribeck import Stribeck
 from .loop import LoopEffects
+from .rigid import RigidBody
 
-__all__ = ["Plant", "Effect", "EFFECTS", "register_effect", "as_plant", "Friction", "Saturation",
+__all__ = ["Plant", "RigidBody", "Effect", "EFFECTS", "register_effect", "as_plant", "Friction", "Saturation",
            "JointLimits", "Stribeck", "crossings", "LoopEffects", "build_effects", "build_loop", "resolve",
            "PLANT_KEYS", "PLANT_ENGINES", "LOOP_KEYS", "Layout", "Option", "registered", "effect_keys"]
 
@@ -140,23 +142,22 @@ def _mujoco_rigid(robot):
     parameters are not its URDF's own (a drawn or payload plant): MuJoCo reads them from the file."""
     from .mujoco import MujocoRigidBody
 
-    own = getattr(robot, "mujoco_urdf", None)
-    if own is not None:
-        path = own()
+    if robot.mujoco_urdf is not None:
+        path = robot.mujoco_urdf()
         if path is None:
             raise ConfigError(f"--plant-engine mujoco simulates a URDF's own parameters; plant '{robot.label}' "
                               "is not the nominal arm")
         return MujocoRigidBody.from_urdf(path, g0=float(-robot.model.gravity.linear[2]))
-    urdf = getattr(robot, "urdf", None)
+    urdf = robot.urdf
     if urdf is None:
         raise ConfigError(f"--plant-engine mujoco needs a URDF; plant '{robot.label}' has none")
-    locked = dict(getattr(robot, "locked", {}) or {})
+    locked = dict(robot.locked or {})
     reread = type(robot).from_urdf(urdf, lock=locked or None)
     if not np.allclose(reread.standard_parameters(), robot.standard_parameters(), rtol=1e-12, atol=1e-12):
         raise ConfigError(f"--plant-engine mujoco simulates the URDF's own parameters; plant '{robot.label}' "
                           "differs from them (a drawn or payload plant): use --plant-engine pinocchio")
     return MujocoRigidBody.from_urdf(urdf, locked=locked or None, g0=float(-robot.model.gravity.linear[2]),
-                                     joint_names=getattr(robot, "joint_names", None))
+                                     joint_names=robot.joint_names)
 
 
 def resolve(robot, table: dict | None = None, *, rate=None, seed: int = 0, rng=None, **options):

@@ -201,6 +201,10 @@ class Effect:
     name = "?"
     compiled = False
     monitor = False
+    #: Joints the effect is sized for, or None (any number of joints).
+    n = None
+    #: Where its values came from (``config``, ``urdf``, ``drawn``).
+    source = "config"
     stiff = True
     config_keys: tuple = ()
     cli: tuple = ()
@@ -290,8 +294,9 @@ class Plant:
 
     Parameters
     ----------
-    rigid : rc3r.robots.base.Robot
-        The rigid-body dynamics (its parameters are the true ones).
+    rigid : rc3r.plants.RigidBody
+        The rigid-body dynamics (its parameters are the true ones): a :class:`~rc3r.robots.base.Robot`
+        or MuJoCo's rigid body (contract: :mod:`rc3r.plants.rigid`).
     effects : sequence of Effect
         Applied in order (actuator maps), their joint torques summed.
     label : str, optional
@@ -320,9 +325,8 @@ class Plant:
         for e in self.effects:
             if not isinstance(e, Effect):
                 raise ConfigError(f"plant effects must be Effect objects, got {e!r}")
-            size = getattr(e, "n", None)
-            if size is not None and size != rigid.n:
-                raise ConfigError(f"plant effect {e.name!r} is sized for {size} joints, the robot has {rigid.n}")
+            if e.n is not None and e.n != rigid.n:
+                raise ConfigError(f"plant effect {e.name!r} is sized for {e.n} joints, the robot has {rigid.n}")
         self._label = label
         names = [e.name for e in self.effects]
         dup = sorted({x for x in names if names.count(x) > 1})
@@ -344,7 +348,7 @@ class Plant:
 
     @property
     def theta(self) -> np.ndarray:
-        """The rigid body's true coefficients (p,)."""
+        """The rigid body's true coefficients (p,); None for a rigid body without them (MuJoCo)."""
         return self.rigid.theta
 
     def effect(self, name: str):

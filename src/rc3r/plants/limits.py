@@ -54,7 +54,7 @@ class JointLimits(Effect):
     @classmethod
     def default_config(cls, robot):
         """``"urdf"`` for a robot read from a URDF (its limits are reported), else None."""
-        return "urdf" if getattr(robot, "urdf", None) else None
+        return "urdf" if robot.urdf else None
 
     def __post_init__(self):
         lo, hi, vel = (np.atleast_1d(np.asarray(x, dtype=float)) for x in (self.lower, self.upper, self.velocity))

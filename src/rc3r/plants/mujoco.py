@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, ParameterError, UrdfError
+from .rigid import RigidBody
 
 __all__ = ["MujocoRigidBody", "MAX_STEP"]
 
@@ -149,8 +150,12 @@ def plant_urdf_text(text: str, where: str, locked: dict | None = None) -> tuple[
     return ET.tostring(root, encoding="unicode"), tuple(moving)
 
 
-class MujocoRigidBody:
-    """A fixed-base chain of 1-DoF joints simulated by MuJoCo, as a plant.
+class MujocoRigidBody(RigidBody):
+    """A fixed-base chain of 1-DoF joints simulated by MuJoCo, as a plant's :class:`~rc3r.plants.RigidBody`.
+
+    It provides ``n``, ``label``, :meth:`forward_dynamics`, :meth:`mass_matrix`, :meth:`describe`,
+    :meth:`bias_forces` and :meth:`advance` (it integrates a held torque itself); not ``p``, ``theta``
+    (None: MuJoCo reads the masses from the URDF), a regressor or compiled kernels.
 
     Parameters
     ----------
@@ -181,6 +186,8 @@ class MujocoRigidBody:
     Units are SI: ``q`` [rad or m], ``qd`` [rad/s or m/s], ``qdd`` [rad/s^2 or m/s^2], ``u``
     [N m or N] (a generalized force per joint, applied as ``qfrc_applied``).
     """
+
+    name = "mujoco"
 
     def __init__(self, model, joint_names=None, g0: float = 9.81, max_step: float = MAX_STEP,
                  source: str | None = None):

@@ -31,11 +31,28 @@ Methods
     :attr:`Robot.standard_parameter_names`, :meth:`Robot.theta_of_standard`,
     :meth:`Robot.with_standard_parameters`, :meth:`Robot.physical_issues`.
 Optional
-    :attr:`Robot.compiled_kernels`: the kernel supply of the compiled engine (see
-    :mod:`rc3r.robots.rr3.engine` for the one the paper's arm has), from which
-    :func:`rc3r.simulate._fast.simulator` builds its simulator. Robots
-    without one are simulated by the generic Python engine
-    (:mod:`rc3r.simulate`), with any control law, in continuous or sampled time.
+    Declared here with their defaults (None, False or a neutral value), so that a caller reads the
+    attribute directly and a robot that has the capability overrides it (no ``getattr`` probes;
+    ``tests/test_contracts.py`` counts them):
+
+    * :attr:`Robot.compiled_kernels`: the kernel supply of the compiled engine (see
+      :mod:`rc3r.robots.rr3.engine` for the 3R's), from which :func:`rc3r.simulate._fast.simulator`
+      builds its simulator; None: the generic Python engine (any law, continuous or sampled time);
+    * :attr:`Robot.urdf`, :attr:`Robot.locked`, :attr:`Robot.joint_names`, :attr:`Robot.robot_name`:
+      the URDF file of this parameter set, its joints fixed at a value, the joint names in ``q``
+      order, the arm's own name; None;
+    * :attr:`Robot.base`, :attr:`Robot.kernel`: numerical base parameters of a robot whose theta is
+      in them, a serial chain's compiled regressor; None;
+    * :attr:`Robot.linear_in_standard_parameters`, :attr:`Robot.model_terms_are_pinocchio`: exact
+      bounds by linear programming, M, C, g are Pinocchio's own; False;
+    * :attr:`Robot.theta_order`: the order of theta in words (``verify-model``);
+    * :attr:`Robot.mujoco_urdf`, :attr:`Robot.c_regressor_source`, :attr:`Robot.with_model`,
+      :attr:`Robot.regressor_pinocchio`, :attr:`Robot.advance`: methods a robot may have (the URDF
+      MuJoCo compiles, its own C99 regressor, itself on another ``pinocchio.Model``, Pinocchio's own
+      regressor, its own integration of a held torque); None where it has not;
+    * :meth:`Robot.default_trajectory_warnings`: what the default trajectory could not follow; [].
+
+    A robot is the plant's rigid body too: it implements :class:`rc3r.plants.RigidBody`.
 
 Then register the class in :data:`rc3r.robots.ROBOTS`. Nothing outside a
 robot's own package may name it: the control laws, the simulator, the bounds and
@@ -50,11 +67,14 @@ import abc
 
 import numpy as np
 
+from ..plants.rigid import RigidBody
+
 __all__ = ["Robot", "kinematics_differ", "stack_states"]
 
 
-class Robot(abc.ABC):
-    """Abstract base of every robot (module docstring: what to implement)."""
+class Robot(RigidBody):
+    """Abstract base of every robot (module docstring: what to implement); a plant's rigid body
+    (:class:`~rc3r.plants.RigidBody`) that is also a controller's model."""
 
     #: Registry name (``rc3r.robots.ROBOTS``).
     name: str = "?"
@@ -155,11 +175,44 @@ class Robot(abc.ABC):
             if "triangle" not in issue:
                 raise ParameterError(issue)
 
-    # ---- optional ---------------------------------------------------------------------
+    # ---- optional capabilities (module docstring): read directly, overridden where a robot has one ----
 
     #: ``(module, kc)``: the compiled engine's kernel supply (a dotted module name, contract
     #: :mod:`rc3r.simulate.engines._template`) and its packed constants, or None (generic Python engine).
     compiled_kernels = None
+    #: The URDF file this parameter set was read from, or None.
+    urdf: str | None = None
+    #: Joints fixed at a value, ``{name: value}`` [rad or m], or None.
+    locked: dict | None = None
+    #: Joint names in ``q`` order, or None.
+    joint_names: tuple | None = None
+    #: The arm's own name (a URDF's ``<robot name>``), or None (then :attr:`name` names it).
+    robot_name: str | None = None
+    #: Numerical base parameters (``BaseParameters``: ``independent`` columns, ``T`` with
+    #: ``theta = T @ pi``) of a robot whose theta is in base parameters, or None.
+    base = None
+    #: A serial chain's compiled Slotine--Li regressor (``ChainKernel``), or None.
+    kernel = None
+    #: True if theta is linear in the standard parameters (exact bounds by linear programming).
+    linear_in_standard_parameters: bool = False
+    #: True if M, C and g are Pinocchio's own (``verify-model`` then compares nothing with itself).
+    model_terms_are_pinocchio: bool = False
+    #: The order of theta, in words (``verify-model``'s report).
+    theta_order: str = "the robot's coefficient order (coefficient_names)"
+    #: ``mujoco_urdf() -> path or None``: the URDF MuJoCo compiles for this robot (None from the method:
+    #: this parameter set is no URDF's); None here: MuJoCo reads :attr:`urdf`.
+    mujoco_urdf = None
+    #: ``c_regressor_source() -> str``: the robot's own C99 regressor for ``rc3r export``; None here: the
+    #: generic chain of :attr:`kernel`.
+    c_regressor_source = None
+    #: ``with_model(model, label) -> Robot``: the same robot on another ``pinocchio.Model`` (a payload added
+    #: by Pinocchio's own sum of inertias); None: not supported.
+    with_model = None
+    #: ``regressor_pinocchio(q, qd, v, a, standard=False)``: Pinocchio's own regressor; None.
+    regressor_pinocchio = None
+    def default_trajectory_warnings(self) -> list[str]:
+        """What the robot's default trajectory could not follow (degenerate joint limits ...); none here."""
+        return []
 
     def describe(self) -> dict:
         """JSON-ready identification of this robot (name, label, n, p)."""

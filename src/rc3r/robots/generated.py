@@ -249,7 +249,8 @@ class GeneratedKernels:
         Parameters
         ----------
         robot : PinocchioRobot
-            Any object with ``.model`` (pinocchio.Model) and ``.base.independent``.
+            A :class:`~rc3r.robots.base.Robot` with base parameters (``robot.base``, not None) and its
+            ``pinocchio.Model``.
         cache_dir : path, optional
             Default :func:`default_cache_dir`.
         functions : sequence of str, optional
@@ -266,13 +267,13 @@ class GeneratedKernels:
         ConfigError
             CasADi missing, no C compiler, or the compilation failed (one line each).
         """
-        model = getattr(robot, "model", None)
-        base = getattr(robot, "base", None)
-        if model is None or base is None or not hasattr(base, "independent"):
+        from .base import Robot
+
+        if not isinstance(robot, Robot) or robot.base is None:  # the contract declares base (None: no base columns)
             raise ParameterError(f"{type(robot).__name__} has no pinocchio model and base columns: "
                                  "use a PinocchioRobot (or GeneratedKernels.for_model)")
-        return cls.for_model(model, base.independent, cache_dir=cache_dir, functions=functions, compiler=compiler,
-                             flags=flags, where=getattr(robot, "robot_name", "robot"))
+        return cls.for_model(robot.model, robot.base.independent, cache_dir=cache_dir, functions=functions, compiler=compiler,
+                             flags=flags, where=robot.robot_name or "robot")
 
     @classmethod
     def for_model(cls, model, columns, cache_dir=None, functions=None, compiler: str | None = None,

@@ -55,6 +55,7 @@ import numpy as np
 from ..errors import DivergenceError, ParameterError
 from . import status as S
 from .engines.base import engine_names as _engine_names
+from .methods import METHODS, SAMPLED_METHODS
 from .steps import (EFFECT_SUBSTEP_S, MAX_STEP_ANGLE, RIGID_SUBSTEP_S, STIFF_STEP, _resolve_steps, _steps,  # noqa: F401
                     _too_fast, continuous_method, default_substeps, period_budget, plant_method, stiffness)
 
@@ -70,13 +71,8 @@ ENGINES = _engine_names()
 #: 3R are ~0.6 GB. A longer run must lower ``output_rate``.
 MAX_ROWS = 5_000_000
 
-#: The fast engine's continuous-time Rosenbrock methods: name -> code of
-#: :func:`rc3r.simulate.engines.compiled.integrate_continuous` (its ``ODE23S``, ``ROS4``, ``RODAS``);
-#: :attr:`SimOptions.method` also takes ``"auto"`` (:func:`continuous_method`).
-METHODS = {"ros4": 1, "ode23s": 0, "rodas": 2}
-
-#: Ways of advancing the plant over a sampling period (:attr:`SimOptions.sampled_method`).
-SAMPLED_METHODS = ("auto", "rk4", "ros4", "rodas", "sdirk")
+#: :data:`METHODS` (continuous-time Rosenbrock methods: name -> the compiled integrator's code) and
+#: :data:`SAMPLED_METHODS` (ways of advancing the plant over a period) are :mod:`.methods`'.
 
 #: Most controller samples of a sampled run (1e9 samples take hours even compiled).
 MAX_SAMPLES = 1_000_000_000
@@ -362,9 +358,10 @@ def _message(status: int, t_end: float, opt: SimOptions, law=None) -> str:
         return (f"stopped at t = {t_end:.6g} s: a {opt.sampled_method.upper()} period of the plant needed more than "
                 f"{period_budget(opt)} steps (a stiff plant: raise [simulation] max_steps, or sampled_method = \"rk4\")")
     if status == S.WORK:
-        eps = getattr(law, "eps", None)
-        if eps is None and getattr(law, "eps_i", None) is not None:
-            eps = float(np.min(law.eps_i))
+        gains = law.describe() if law is not None else {}  # every field: eps of a boundary layer, or eps_i
+        eps = gains.get("eps")
+        if eps is None and gains.get("eps_i") is not None:
+            eps = float(np.min(gains["eps_i"]))
         why = (f"the boundary layer eps = {eps:g} makes the loop too stiff: raise eps, or simulate the "
                "controller sampled (--rate)" if eps is not None else "the loop is too stiff")
         return (f"stopped at t = {t_end:.6g} s: the integrator needed more than {opt.max_steps:g} steps per "
@@ -386,7 +383,7 @@ def planned_engine(plant, law, options: SimOptions) -> tuple[str, str | None]:
     available compiled engine (its integrator not built yet and the run short:
     :meth:`rc3r.simulate.engines.Engine.cold`), else None.
 
-    Example: ``planned_engine(spec.plant, spec.law, spec.options)`` -> ``("fast", None)`` once the
+    Example: ``planned_engine(spec.true_plant, spec.law, spec.options)`` -> ``("fast", None)`` once the
     arm's compiled integrator is in numba's cache.
     """
     from ..plants import as_plant
@@ -406,7 +403,7 @@ def planned_engine(plant, law, options: SimOptions) -> tuple[str, str | None]:
 
 def _check_structure(plant, model, law, trajectory, loop, opt) -> None:
     """The run's parts fit together: sizes, the model's kinematics = the plant's, loop effects sampled."""
-    from ..robots.base import kinematics_differ
+    from ..robots.base import Robot, kinematics_differ
 
     if trajectory.n != plant.n:
         raise ParameterError(f"trajectory has {trajectory.n} joints, robot '{plant.label}' has {plant.n}")
@@ -414,11 +411,11 @@ def _check_structure(plant, model, law, trajectory, loop, opt) -> None:
         raise ParameterError(f"the controller's model has {model.n} joints, the plant '{plant.label}' has {plant.n}")
     if law.p != model.p:
         raise ParameterError(f"law {law.name!r} has {law.p} coefficients, robot '{model.label}' has {model.p}")
-    if model is not plant.rigid and hasattr(plant.rigid, "regressor"):
+    if model is not plant.rigid and isinstance(plant.rigid, Robot):  # MuJoCo's rigid body has no regressor
         why = kinematics_differ(model, plant.rigid)
         if why:
             raise ParameterError(f"the plant '{plant.label}' is not the model's arm: {why}")
-    if hasattr(plant.rigid, "advance") and any(not e.monitor and type(e).joint_torque is not
+    if plant.rigid.advance is not None and any(not e.monitor and type(e).joint_torque is not
                                                type(e).__mro__[-2].joint_torque for e in plant.effects):
         raise ParameterError("joint-torque effects (friction) are not applied inside a rigid body that integrates "
                              "itself (MuJoCo): use the Pinocchio plant engine for friction")
@@ -438,7 +435,8 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
     ----------
     plant : rc3r.plants.Plant or rc3r.robots.base.Robot
         The true system: a rigid body and its effects (friction, saturation, limits); a bare
-        robot is the rigid plant. The law never reads its parameters.
+        robot is the rigid plant. The law never reads its parameters. Of a run specification, its
+        ``true_plant`` (``true_rigid`` is the rigid body alone: no effects); ``rc3r.execute(spec)`` runs it whole.
     law : rc3r.controllers.Law
         Any registered or user-defined law, with its own model theta (p,).
     trajectory : rc3r.trajectory.Trajectory
@@ -467,7 +465,7 @@ def simulate(plant, law, trajectory, options: SimOptions = SimOptions(), x0=None
 
     >>> import rc3r
     >>> spec = rc3r.build_run(controller="robust", perturbed=True, duration=0.5)
-    >>> res = rc3r.simulate(spec.plant, spec.law, spec.trajectory, spec.options)
+    >>> res = rc3r.simulate(spec.true_plant, spec.law, spec.trajectory, spec.options)
     >>> res.verdict, res.outcome, res.engine, res.q.shape
     ('clean', 'finished', 'fast', (501, 3))
     >>> bool(abs(res.e).max() < 1e-3)

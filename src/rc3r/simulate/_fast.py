@@ -40,7 +40,8 @@ import numpy as np
 
 from .. import _numba_cache
 from ..errors import ParameterError
-from . import METHODS, _limits, _result, _sample_grid
+from . import _limits, _result, _sample_grid
+from .methods import METHODS, PERIOD_METHODS
 from . import status as S
 from .engines import _dispatch
 from .steps import continuous_method, period_budget
@@ -50,10 +51,6 @@ __all__ = ["CompiledSimulator", "simulator", "instantiate", "run", "CHUNK_S", "H
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
 
-#: :attr:`SimOptions.sampled_method` (resolved) -> the ``stiff`` code of
-#: :func:`rc3r.simulate.engines.compiled.integrate_sampled` (its ``RK4_PERIODS``, ``ROS4_PERIODS``,
-#: ``RODAS_PERIODS``).
-PERIOD_METHODS = {"rk4": 0, "ros4": 1, "rodas": 2, "sdirk": 3}
 
 #: Largest continuous-time step [s]; the stored rows are interpolated inside the steps.
 HMAX = 0.001
@@ -278,9 +275,9 @@ def simulator(rigid) -> CompiledSimulator | None:
 
     Parameters
     ----------
-    rigid : Robot
-        A robot (or any rigid body) with ``compiled_kernels``, ``(module, kc)``
-        (:attr:`rc3r.robots.base.Robot.compiled_kernels`), or None / no such attribute.
+    rigid : rc3r.plants.RigidBody
+        A robot (or any rigid body): its declared ``compiled_kernels``, ``(module, kc)``
+        (:attr:`rc3r.robots.base.Robot.compiled_kernels`), or None.
 
     Returns
     -------
@@ -288,7 +285,7 @@ def simulator(rigid) -> CompiledSimulator | None:
         The one instance for that supply module (the same object for every robot that declares it),
         or None if ``rigid`` declares no compiled kernels (the generic Python engine runs it).
     """
-    declared = getattr(rigid, "compiled_kernels", None)
+    declared = rigid.compiled_kernels
     if declared is None:
         return None
     module = declared[0]

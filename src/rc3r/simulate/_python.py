@@ -4,7 +4,9 @@ The plant is :meth:`rc3r.plants.Plant.forward_dynamics` (the rigid body's forwar
 Pinocchio ABA for the robots here, under every effect); the controller is
 :meth:`rc3r.controllers.Law.torque` on the *model* (a robot of the same kinematics), which it
 sees only through its regressor. In sampled mode the controller gets the measurement of the
-loop's effects (:mod:`rc3r.plants.loop`) and its torque goes through their delay line; a rigid
+loop's effects (:mod:`rc3r.plants.loop`) and its torque goes through their delay line (the hold, the
+delay line and the Euler step of the law's state are :class:`rc3r.controllers.sampled.SampledLoop`,
+which :meth:`rc3r.Controller.step` shares); a rigid
 body with an ``advance(q, qd, u, T)`` method (MuJoCo, :mod:`rc3r.plants.mujoco`) integrates
 the held torque itself (its own RK4 at a fine step) instead of this module's RK4. ``python``: SciPy ``Radau`` at the options'
 tolerances (continuous) or RK4 with ``nsub`` sub-steps per period (sampled; SciPy's Radau per period
@@ -18,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._numba_cache import ready_or_python
+from ..controllers.sampled import SampledLoop
 from ..trajectory import reference_into
 from . import _limits, _result, _sample_grid
 from . import status as S
@@ -53,14 +56,16 @@ class _Loop:
         self.nrhs = 0
         self.budget = budget
 
-    def control(self, t, x, q=None, qd=None):
-        """``(u, zdot, ||Y^T r||)`` at time t, state x = (q, qd, z), measured (q, qd) (default: x's)."""
-        n = self.n
+    def torque(self, t, q, qd, z):
+        """``(u, zdot, ||Y^T r||)`` at time t on the measured (q, qd) and the law's state z."""
         self._reference(self.tp, t, self.ref)
-        q = x[0:n] if q is None else q
-        qd = x[n:2 * n] if qd is None else qd
-        u, zdot, yn = self.law.torque(self.model, q, qd, self.ref, x[2 * n:])
+        u, zdot, yn = self.law.torque(self.model, q, qd, self.ref, z)
         return np.asarray(u, dtype=float), np.asarray(zdot, dtype=float), float(yn)
+
+    def control(self, t, x):
+        """:meth:`torque` at time t on the state x = (q, qd, z)."""
+        n = self.n
+        return self.torque(t, x[0:n], x[n:2 * n], x[2 * n:])
 
     def plant_rhs(self, x, u):
         """``(qd, qdd)`` of the plant under the actuators' torque ``u`` (after the actuator maps)."""
@@ -114,19 +119,17 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     status, t_end = S.OK, opt.duration
     h = Ts / opt.substeps
     noise = loop.noise(nsamples) if loop is not None else np.zeros((0, 2 * n))
-    delayed: list = []  # commands of the last delay + 1 samples
-    delay = loop.delay if loop is not None else 0
-    advance = getattr(plant.rigid, "advance", None)
+    hold = SampledLoop(law, Ts, loop.delay if loop is not None else 0, z0=x0[2 * n:])
+    advance = plant.rigid.advance  # declared: None unless the rigid body integrates itself (MuJoCo)
     check = ready_or_python(S.check)  # interpreted while numba's cache is cold
     for s in range(nsamples + 1):
         t = s * Ts
         S.raise_if_stopped()
-        qm, qdm = loop.measure(x, s, noise) if loop is not None else (None, None)
-        ucmd, zdot, yn = ctl.control(t, x, qm, qdm)
-        delayed.append(ucmd)
-        if len(delayed) > delay + 1:
-            delayed.pop(0)
-        u = np.asarray(plant.applied_torque(x[:n], x[n:2 * n], delayed[0]), dtype=float)  # u_{s-d}, or u_0
+        qm, qdm = loop.measure(x, s, noise) if loop is not None else (x[:n], x[n:2 * n])
+        held = hold.sample(s, ctl.torque, qm, qdm)  # z_s by forward Euler, u_s into the delay line
+        x[2 * n:] = hold.z
+        ucmd, yn = hold.command, hold.diagnostic
+        u = np.asarray(plant.applied_torque(x[:n], x[n:2 * n], held), dtype=float)  # u_{s-d}, or u_0
         if uprev is not None:
             tv += np.abs(u - uprev)
         uprev = u
@@ -157,7 +160,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
         if not ok:
             status, t_end = S.NONFINITE, t
             break
-        x = np.concatenate([xs, x[2 * n:] + Ts * zdot])  # controller state: forward Euler
+        x = np.concatenate([xs, x[2 * n:]])  # the controller state: the next sample's Euler step
     return _result(plant, law, trajectory, opt, np.array(rows_t), np.array(rows_x).reshape(len(rows_t), -1),
                    np.array(rows_u).reshape(len(rows_t), n), np.array(rows_r).reshape(len(rows_t), n),
                    np.array(rows_y), status, t_end, ctl.nrhs, nsamples, 0, tv=tv)

@@ -62,7 +62,7 @@ def verdict_of(res, tolerance=None) -> dict:
 def _verdict(res, tolerance) -> dict:
     from .verdict import TOLERANCE, verdict
 
-    effects = {e.get("effect"): e for e in getattr(res, "robot", {}).get("effects", [])}
+    effects = {e.get("effect"): e for e in res.robot.get("effects", [])}
     limits = None
     if "limits" in effects:
         from ..plants.limits import JointLimits, crossings
@@ -124,8 +124,8 @@ def run_metrics(res, seed=None, tolerance=None) -> dict:
                        else {"python": "scipy Radau", "reference": "scipy Radau"}.get(res.engine)}
         if res.mode == "continuous" else None,
         "seed": seed,
-        "effects": getattr(res, "robot", {}).get("effects", []),
-        "loop": getattr(res, "loop", None),
+        "effects": res.robot.get("effects", []),
+        "loop": res.loop,
     }
     out.update(_verdict(res, tolerance))
     return out

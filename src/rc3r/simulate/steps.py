@@ -76,7 +76,7 @@ def continuous_method(law, options):
     Jacobian per step costs 3.5-4.1x the right-hand sides of ode23s with a kept Jacobian."""
     if options.rate is not None or options.method != "auto":
         return options
-    return replace(options, method="rodas" if getattr(law, "stiff", False) else "ode23s")
+    return replace(options, method="rodas" if law.stiff else "ode23s")
 
 
 def _resolve_steps(plant, options):
@@ -102,10 +102,9 @@ def default_substeps(plant, rate: float, lam: float | None = None) -> int:
     from ..plants import as_plant
 
     plant = as_plant(plant)
-    effects = getattr(plant, "effects", ())
     # an effect declares whether it adds a state-dependent force (Effect.stiff: friction does; saturation acts
     # on the held torque and limits only watch)
-    h = RIGID_SUBSTEP_S if not any(getattr(e, "stiff", True) for e in effects) else EFFECT_SUBSTEP_S
+    h = RIGID_SUBSTEP_S if not any(e.stiff for e in plant.effects) else EFFECT_SUBSTEP_S
     lam = stiffness(plant) if lam is None else lam
     if lam > 0:
         h = min(h, STIFF_STEP / lam)
@@ -126,8 +125,7 @@ def stiffness(plant, q=None) -> float:
     from ..plants import as_plant
 
     plant = as_plant(plant)
-    slopes = [d for d in (getattr(e, "damping", lambda: None)() for e in getattr(plant, "effects", ()))
-              if d is not None]
+    slopes = [d for d in (e.damping() for e in plant.effects) if d is not None]
     if not slopes:
         return 0.0
     D = np.sum(np.atleast_2d(np.asarray(slopes, dtype=float)), axis=0)

@@ -306,7 +306,7 @@ def certified_bounds(robot, box: Box) -> Bounds:
         The box allows a mass <= 0 for ``p``.
     """
     box.check(robot)
-    if getattr(robot, "linear_in_standard_parameters", False):
+    if robot.linear_in_standard_parameters:
         return _linear_bounds(robot, box)
     S = _structure(robot)
     nom = robot.standard_parameters()

@@ -168,7 +168,7 @@ def with_payload(robot, mass: float, com, inertia=None, frame: str | None = None
     """
     lo, _, c, I = _check(robot, mass, com, inertia, frame)
     label = label or f"{robot.label}+payload({lo:g} kg)"
-    if hasattr(robot, "with_model"):
+    if robot.with_model is not None:
         import pinocchio as pin
 
         model = robot.model.copy()

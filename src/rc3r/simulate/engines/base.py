@@ -146,8 +146,8 @@ class CompiledEngine(Engine):
 
     def unavailable(self, plant, law):
         rigid = plant.rigid
-        if getattr(rigid, "compiled_kernels", None) is None:
-            return f"robot {getattr(rigid, 'name', type(rigid).__name__)!r} has no compiled simulator"
+        if rigid.compiled_kernels is None:  # declared by every rigid body (rc3r.plants.RigidBody)
+            return f"robot {rigid.name!r} has no compiled simulator"
         if law.code is None:
             return f"law {law.name!r} has no compiled kernel"
         if not plant.compiled:
@@ -167,8 +167,8 @@ class CompiledEngine(Engine):
         if options.rate is None or cold_start_policy() == "compile":
             return None
         steps = round(options.duration * options.rate) * options.substeps
-        is_cached = getattr(simulator(plant.rigid), "is_cached", None)
-        if steps > COLD_MAX_SUBSTEPS or is_cached is None or is_cached("sampled"):
+        sim = simulator(plant.rigid)
+        if steps > COLD_MAX_SUBSTEPS or sim is None or sim.is_cached("sampled"):
             return None
         return (f"its compiled integrator is not built yet and {steps} RK4 sub-steps take the python engine "
                 "less time than compiling it")

@@ -38,6 +38,7 @@ from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_ja
 from rc3r.simulate.engines._jacobian import work as _tangent_work
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
 from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
+from rc3r.simulate.methods import ODE23S, RK4_PERIODS, RODAS, RODAS_PERIODS, ROS4, ROS4_PERIODS  # one source
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
 from rc3r.trajectory import reference_into, reference_jerk_into
 
@@ -146,10 +147,6 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
         _tangents(kc, tw[8][i], q, qd, v, a, tw[13][i], wk)
     _effect_slopes(fx, u, qd, tw[15])  # the plant effects' slopes at the delivered u and qd
     return law_jacobian(law, cp, tw[15], x, u, Y, r, rows, tw, J, Ft)
-
-
-#: ``method`` codes of :func:`integrate_continuous` (:data:`rc3r.simulate.METHODS` names them).
-ODE23S, ROS4, RODAS = 0, 1, 2
 
 
 @njit(**_JIT)
@@ -586,10 +583,6 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
     return OK, nf
 
 
-#: ``stiff`` codes of :func:`integrate_sampled` (:data:`rc3r.simulate.SAMPLED_METHODS` names them): RK4
-#: sub-steps, adaptive ROS4 periods (:func:`_stiff_period`), adaptive RODAS periods (:func:`_rodas_period`),
-#: adaptive SDIRK3 periods with Newton on the friction (:func:`_sdirk_period`).
-RK4_PERIODS, ROS4_PERIODS, RODAS_PERIODS, SDIRK_PERIODS = 0, 1, 2, 3
 #: Accepted RODAS steps of a period one forward-difference Jacobian is kept for (:func:`_rodas_period`).
 PERIOD_JAC_REUSE = 1
 
