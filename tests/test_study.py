@@ -238,7 +238,8 @@ def test_payload_help_says_the_controller_does_not_know_it(capsys):
 
 def test_perturbed_run_says_the_perturbation_is_in_the_controller_model(tmp_path, capsys):
     """`rc3r run --perturbed` names the plant (the nominal robot itself) and the controller's model:
-    theta_0 by the paper's method and rho = 186.813 (the paper's rho, 186.8129, to 6 digits)."""
+    theta_0 by the paper's method and rho = 186.813 (the paper's rho, 186.8129, to 6 digits); an ideal run
+    says its model is the plant's theta, and names the plant's effects as a perturbed run does."""
     assert main(["run", "--perturbed", "--duration", "0.05", "--out", str(tmp_path / "r")]) == 0
     line = next(ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("rc3r run:"))
     assert "plant 'nominal' (the nominal robot)" in line
@@ -247,6 +248,10 @@ def test_perturbed_run_says_the_perturbation_is_in_the_controller_model(tmp_path
     assert main(["run", "--duration", "0.05", "--out", str(tmp_path / "i")]) == 0
     line = next(ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("rc3r run:"))
     assert "controller model = the plant's theta (ideal)" in line
+    assert main(["run", "--stribeck", "1:1.5:0.1:0.5", "--rate", "1000", "--duration", "0.05",
+                 "--out", str(tmp_path / "s")]) == 0  # an ideal run's plant effects are named too
+    line = next(ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("rc3r run:"))
+    assert "(ideal); plant effects: stribeck (config)" in line
 
 
 # ---- defaults that could not follow the robot: warnings ------------------------------------------

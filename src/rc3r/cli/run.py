@@ -117,7 +117,7 @@ def describe_model(spec) -> str:
     if spec.true_rigid.label == model.get("nominal"):
         plant += " (the nominal robot)"
     if spec.scenario != "perturbed" and (model.get("theta_source") or "").startswith("theta of the plant"):
-        return f"{plant}; controller model = the plant's theta (ideal)"
+        return f"{plant}; controller model = the plant's theta (ideal)" + _effects_text(spec)
     short = lambda src: (src or "").split(":")[0]  # noqa: E731 - the source up to its formula
     out = f"{plant}; controller model ({spec.scenario}): {short(model.get('theta_source'))}"
     if model.get("rho") is not None:
