@@ -29,11 +29,16 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["FRICTION_KINDS", "coulomb", "COULOMB_LAW", "parse_friction", "friction_names", "friction_columns",
-           "identification_regressor"]
+__all__ = ["FRICTION_KINDS", "JOINT_KINDS", "coulomb", "COULOMB_LAW", "parse_friction", "friction_names",
+           "friction_columns", "joint_columns", "identification_regressor"]
 
 #: Friction kinds and the prefix of their coefficient names.
 FRICTION_KINDS = {"viscous": "fv", "coulomb": "fc", "offset": "f0"}
+
+#: Every per-joint column kind, friction and the rotor inertia (``armature`` [kg m^2], Pinocchio's
+#: ``model.armature``: the column is the joint's acceleration ``a_j``), and the prefix of their names.
+#: Columns of several kinds follow ``theta`` in this order: for every kind, joints 1..n.
+JOINT_KINDS = {**FRICTION_KINDS, "armature": "ia"}
 
 #: The Coulomb law, as recorded in identified.json and bounds.toml.
 COULOMB_LAW = "f_c tanh(qd / v_s) (sign(qd) when v_s = 0)"
@@ -61,8 +66,8 @@ def parse_friction(text) -> tuple[str, ...]:
 
 
 def friction_names(kinds, n: int) -> tuple[str, ...]:
-    """``("fv1", ..., "fvn", "fc1", ...)`` for the kinds given."""
-    return tuple(f"{FRICTION_KINDS[k]}{j}" for k in kinds for j in range(1, n + 1))
+    """``("fv1", ..., "fvn", "fc1", ..., "ia1", ...)`` for the kinds given (:data:`JOINT_KINDS`)."""
+    return tuple(f"{JOINT_KINDS[k]}{j}" for k in kinds for j in range(1, n + 1))
 
 
 def friction_columns(qd, kinds, v_s: float = 0.0) -> np.ndarray:
@@ -73,6 +78,27 @@ def friction_columns(qd, kinds, v_s: float = 0.0) -> np.ndarray:
     idx = np.arange(n)
     for k, kind in enumerate(kinds):
         val = qd if kind == "viscous" else coulomb(qd, v_s) if kind == "coulomb" else np.ones_like(qd)
+        out[:, idx, k * n + idx] = val
+    return out
+
+
+def joint_columns(qd, a, kinds, v_s: float = 0.0) -> np.ndarray:
+    """Per-joint columns (N, n, n * len(kinds)) of velocities ``qd`` and accelerations ``a`` (N, n).
+
+    ``kinds`` in :data:`JOINT_KINDS` order; ``viscous``: ``qd_j``, ``coulomb``: :func:`coulomb`,
+    ``offset``: 1, ``armature``: ``a_j`` (the Slotine--Li reference acceleration in a control law,
+    ``qdd`` in identification). Each column is nonzero only in its joint's row.
+    """
+    qd = np.atleast_2d(np.asarray(qd, dtype=float))
+    a = np.atleast_2d(np.asarray(a, dtype=float))
+    N, n = qd.shape
+    out = np.zeros((N, n, n * len(kinds)))
+    idx = np.arange(n)
+    for k, kind in enumerate(kinds):
+        if kind not in JOINT_KINDS:
+            raise ConfigError(f"unknown joint column kind {kind!r} (choose from {', '.join(JOINT_KINDS)})")
+        val = (qd if kind == "viscous" else coulomb(qd, v_s) if kind == "coulomb"
+               else a if kind == "armature" else np.ones_like(qd))
         out[:, idx, k * n + idx] = val
     return out
 
