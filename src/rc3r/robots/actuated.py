@@ -47,7 +47,7 @@ __all__ = ["ActuatedRobot", "supply_module", "parse_kinds", "SUPPLY"]
 #: The template supply (wrapping the 3R's) and the inner supply its ``# inner supply`` lines name.
 SUPPLY = "rc3r.robots.actuated_supply"
 _TEMPLATE_INNER = "rc3r.robots.rr3.engine"
-_TANGENTS_MARK = "# ---- tangents"
+_TANGENTS_MARK = "\n# ---- tangents (kept only"
 _MODULES: dict = {}
 
 
