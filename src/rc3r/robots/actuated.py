@@ -23,7 +23,8 @@ As a plant's rigid body it is the rigid body **with its armature** (:meth:`forwa
 ``(M + diag(ia)) qdd = u - C qd - g``); the plant's friction is the :class:`~rc3r.plants.Friction` effect with
 the same coefficients (:func:`rc3r.plants.actuated.actuated_plant`), so the engines' stiff-friction integration
 sees it. Its compiled kernels wrap the inner robot's (:mod:`.actuated_supply`, one copy per inner supply
-written by :func:`supply_module`), its C regressor the inner one (:meth:`ActuatedRobot.c_regressor_source`).
+written by :func:`supply_module`), its C regressor the inner one plus the joint columns (:mod:`.actuated_c`, which
+:func:`rc3r.export.c.regressor_source` calls).
 """
 from __future__ import annotations
 
@@ -279,16 +280,6 @@ class ActuatedRobot(Robot):
         plant = np.concatenate([self.coefficients(k) for k in JOINT_KINDS])
         return np.concatenate([inner_kc, [self.n, self.rigid.p, self.coulomb_velocity], slots, plant,
                                [inner_kc.size]]).astype(np.float64)
-
-    @property
-    def c_regressor_source(self):
-        """``c_regressor_source() -> str`` (:mod:`rc3r.export.c`'s ``rc3r_regressor``) of the rigid body's C plus
-        the joint columns, or None if the rigid body has no C regressor of its own."""
-        if self.rigid.c_regressor_source is None:
-            return None
-        from .actuated_c import c_regressor_source
-
-        return lambda: c_regressor_source(self)
 
     urdf = property(lambda self: self.rigid.urdf)
     locked = property(lambda self: self.rigid.locked)

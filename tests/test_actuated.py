@@ -1,0 +1,215 @@
+"""Friction and rotor inertia (armature) in the controller's model: :class:`rc3r.robots.actuated.ActuatedRobot`.
+
+Independent sources: Pinocchio with ``model.armature`` set here (``rnea``, ``crba``, ``aba`` include it, as
+measured on Pinocchio 4.1) plus the plant's friction law :class:`rc3r.plants.Friction` (its own module, the
+law the plants apply) for the model; the python engine (Pinocchio's ABA, SciPy/RK4 in
+:mod:`rc3r.simulate._python`) for the compiled engine; a C compiler for the exported regressor.
+Tolerances: the 3R's and the UR5's torques are O(10..100) N m, float64 sums of a few hundred terms:
+1e-10 of the largest entry leaves four orders above the ~1e-14 measured.
+"""
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import rc3r
+from rc3r.errors import ConfigError, ParameterError
+from rc3r.plants import Friction, Plant
+from rc3r.robots import load_robot
+from rc3r.robots.actuated import ActuatedRobot
+
+KINDS = ("viscous", "coulomb", "offset", "armature")
+V_S = 0.05
+
+
+def _joint(n, scale=1.0):
+    """Joint coefficients in friction_names order: fv, fc, f0, ia per joint."""
+    return scale * np.concatenate([np.linspace(0.5, 1.5, n), np.linspace(1.0, 3.0, n), np.linspace(-0.4, 0.4, n),
+                                   np.linspace(0.05, 0.3, n)])
+
+
+def _reference(robot, joint):
+    """(pinocchio model with armature, Friction) built here from the rigid body and the coefficients."""
+    n = robot.n
+    m = robot.model.copy()
+    m.armature = joint[3 * n:]
+    return m, Friction(joint[:n], joint[n:2 * n], joint[2 * n:3 * n], v_s=V_S)
+
+
+@pytest.fixture(scope="module", params=["rr3", "ur5"])
+def arm(request):
+    return load_robot(request.param)
+
+
+def test_regressor_is_rnea_with_armature_plus_the_plants_friction_law(arm, rng):
+    """Y_act(q, qd, qd, qdd) theta_act = pin.rnea(model with armature) - Friction.joint_torque(qd) at random
+    states, single and batched (1e-10 of the largest torque)."""
+    import pinocchio as pin
+
+    joint = _joint(arm.n)
+    act = ActuatedRobot(arm, KINDS, V_S, joint)
+    model, fr = _reference(arm, joint)
+    data = model.createData()
+    Q, QD, QDD = rng.uniform(-2, 2, (3, 5, arm.n))
+    ref = np.array([pin.rnea(model, data, q, qd, a) - fr.joint_torque(q, qd) for q, qd, a in zip(Q, QD, QDD)])
+    got = act.regressor(Q, QD, QD, QDD) @ act.theta
+    assert np.abs(got - ref).max() <= 1e-10 * np.abs(ref).max()
+    assert np.abs(act.regressor(Q[0], QD[0], QD[0], QDD[0]) @ act.theta - ref[0]).max() <= 1e-10 * np.abs(ref).max()
+    assert act.p == arm.p + 4 * arm.n and act.coefficient_names[arm.p] == "fv1"
+    assert act.coefficient_names[-1] == f"ia{arm.n}"
+
+
+def test_mass_matrix_and_forward_dynamics_are_crba_and_aba_with_armature(arm, rng):
+    """M_act = pin.crba with armature (upper triangle mirrored) and the actuated rigid body's forward dynamics =
+    pin.aba with armature (no friction: a plant's friction is its Friction effect)."""
+    import pinocchio as pin
+
+    joint = _joint(arm.n)
+    act = ActuatedRobot(arm, KINDS, V_S, joint)
+    model, _ = _reference(arm, joint)
+    data = model.createData()
+    q, qd, u = rng.uniform(-2, 2, (3, arm.n))
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    assert np.abs(act.mass_matrix(q) - M).max() <= 1e-10 * np.abs(M).max()
+    ref = pin.aba(model, data, q, qd, 10 * u)
+    assert np.abs(act.forward_dynamics(q, qd, 10 * u) - ref).max() <= 1e-9 * max(1.0, np.abs(ref).max())
+
+
+def test_theta_model_mass_matrix_is_crba_with_armature(arm, rng):
+    """The design rule's M(q; theta) from the regressor (ThetaModel: Y(q, 0, 0, e_j) - Y(q, 0, 0, 0)) on the
+    actuated model is crba with armature: friction and offset columns cancel in the identity the sampled rule
+    uses, the armature stays."""
+    import pinocchio as pin
+
+    from rc3r.design.rule import ThetaModel
+
+    joint = _joint(arm.n)
+    act = ActuatedRobot(arm, KINDS, V_S, joint)
+    model, _ = _reference(arm, joint)
+    q = rng.uniform(-2, 2, arm.n)
+    M = pin.crba(model, model.createData(), q)
+    M = np.triu(M) + np.triu(M, 1).T
+    assert np.abs(ThetaModel(act, act.theta).mass_matrix(q) - M).max() <= 1e-10 * np.abs(M).max()
+
+
+def test_compiled_supply_equals_pinocchio_and_friction_law(arm, rng):
+    """The compiled supply (:mod:`rc3r.robots.actuated_supply` over the 3R's closed form, its generated copy
+    over the chain's): ``u = w + Y th`` at th = theta_act is rnea with armature + friction; ``xi = Y^T r`` is the
+    python regressor's (itself tested above); ``M_th r`` is crba's; the plant's forward dynamics is aba with
+    the armature."""
+    import importlib
+
+    import pinocchio as pin
+
+    joint = _joint(arm.n)
+    act = ActuatedRobot(arm, KINDS, V_S, joint)
+    model, fr = _reference(arm, joint)
+    data = model.createData()
+    module, kc = act.compiled_kernels
+    S = importlib.import_module(module)
+    wk = S.make_work(kc)
+    n, p = arm.n, act.p
+    Y = np.zeros((n, p))
+    q, qd, a, r, w, tau = rng.uniform(-2, 2, (6, n))
+    S.passes_into(kc, q, qd, qd, a, Y, wk)
+    u, xi, Mr, qdd = np.zeros(n), np.zeros(p), np.zeros(n), np.zeros(n)
+    S.apply_into(kc, Y, act.theta, w, u, wk)
+    ref = pin.rnea(model, data, q, qd, a) - fr.joint_torque(q, qd) + w
+    assert np.abs(u - ref).max() <= 1e-10 * np.abs(ref).max()
+    S.xi_into(kc, Y, r, xi, wk)
+    ref_xi = act.regressor(q, qd, qd, a).T @ r
+    assert np.abs(xi - ref_xi).max() <= 1e-10 * np.abs(ref_xi).max()
+    S.mass_into(kc, q, act.theta, r, Mr, Y, wk)
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    assert np.abs(Mr - M @ r).max() <= 1e-10 * np.abs(M @ r).max()
+    assert S.forward_dynamics_into(kc, q, qd, 20 * tau, qdd, wk)
+    ref = pin.aba(model, data, q, qd, 20 * tau)
+    assert np.abs(qdd - ref).max() <= 1e-9 * max(1.0, np.abs(ref).max())
+    Yf = np.zeros((n, p))
+    S.regressor_into(kc, q, qd, qd, a, Yf, wk)
+    assert np.abs(Yf - act.regressor(q, qd, qd, a)).max() <= 1e-10 * np.abs(Yf).max()
+
+
+def test_tangents_are_the_derivatives_of_the_torque(rng):
+    """The 3R supply's analytic d(Y th)/d(q, qd, v, a) (inner tangents + joint slopes: fv + fc sech^2 / v_s in
+    qd, ia in a) equals central differences of the python regressor (step 1e-6: error ~1e-10 relative)."""
+    import importlib
+
+    arm = load_robot("rr3")
+    act = ActuatedRobot(arm, KINDS, V_S, _joint(3))
+    module, kc = act.compiled_kernels
+    S = importlib.import_module(module)
+    wk = S.make_work(kc)
+    x = rng.uniform(-1, 1, 12)
+    D = np.zeros((3, 12))
+    assert S.tangents_into(kc, act.theta, x[:3], x[3:6], x[6:9], x[9:], D, wk)
+    h, F = 1e-6, np.zeros((3, 12))
+    for k in range(12):
+        e = np.zeros(12)
+        e[k] = h
+        tp, tm = (act.regressor(*np.split(x + s * e, 4)) @ act.theta for s in (1, -1))
+        F[:, k] = (tp - tm) / (2 * h)
+    assert np.abs(D - F).max() <= 1e-7 * np.abs(F).max()
+
+
+def test_physical_issues_refuse_negative_coefficients_and_unsmoothed_coulomb():
+    """fv < 0, fc < 0, ia < 0 and a Coulomb column with v_s = 0 are each named; a negative offset is a bias,
+    allowed; an unknown kind is a one-line ConfigError."""
+    arm = load_robot("rr3")
+    ok = ActuatedRobot(arm, KINDS, V_S, _joint(3))
+    assert not [i for i in ok.physical_issues() if "triangle" not in i]
+    for k, name in ((0, "viscous"), (3, "coulomb"), (9, "armature")):
+        j = _joint(3)
+        j[k] = -0.1
+        issues = ActuatedRobot(arm, KINDS, V_S, j).physical_issues()
+        assert any(name in i for i in issues), issues
+    assert any("v_s" in i for i in ActuatedRobot(arm, KINDS, 0.0, _joint(3)).physical_issues())
+    with pytest.raises(ParameterError):
+        ActuatedRobot(arm, KINDS, V_S, _joint(3)[:5])
+    with pytest.raises(ConfigError, match="unknown joint coefficient kind"):
+        ActuatedRobot(arm, ("viscous", "stiction"), V_S)
+
+
+def test_compiled_run_equals_python_engine_3r():
+    """A robust law whose model carries friction and armature on a plant with other friction and armature
+    (the 3R at 1 kHz, 0.5 s): the compiled engine equals the python engine to 1e-8 rad and 1e-6 N m (measured
+    5.6e-17 rad, 2.2e-12 N m)."""
+    from dataclasses import replace
+
+    from rc3r.controllers import make_law
+
+    arm = load_robot("rr3")
+    plant = ActuatedRobot(arm, KINDS, V_S, _joint(3)).as_plant()
+    model = ActuatedRobot(arm, KINDS, V_S, _joint(3, 0.7))
+    spec = rc3r.build_run(controller="fbl", rate=1000.0, duration=0.5)
+    law = make_law("robust", model.theta, rho=0.5 * np.linalg.norm(model.theta), eps=1.0)
+    fast, py = (rc3r.simulate(plant, law, spec.trajectory, replace(spec.options, engine=e), model=model)
+                for e in ("fast", "python"))
+    assert fast.ok and py.ok and fast.engine == "fast" and py.engine == "python"
+    assert np.abs(fast.q - py.q).max() <= 1e-8
+    assert np.abs(fast.u - py.u).max() <= 1e-6
+
+
+@pytest.mark.slow
+def test_compiled_run_equals_python_engine_ur5():
+    """The same on the UR5 (the chain supply's generated copy; about 150 s of compilation on a cold cache):
+    measured 5.6e-17 rad, 8e-14 N m."""
+    from dataclasses import replace
+
+    from rc3r.controllers import make_law
+
+    arm = load_robot("ur5")
+    plant = ActuatedRobot(arm, KINDS, V_S, _joint(6)).as_plant()
+    model = ActuatedRobot(arm, KINDS, V_S, _joint(6, 0.7))
+    spec = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=0.5)
+    law = make_law("robust", model.theta, rho=0.5 * np.linalg.norm(model.theta), eps=5.0, K=20.0, Lambda=20.0)
+    fast, py = (rc3r.simulate(plant, law, spec.trajectory, replace(spec.options, engine=e), model=model)
+                for e in ("fast", "python"))
+    assert fast.ok and py.ok and fast.engine == "fast"
+    assert np.abs(fast.q - py.q).max() <= 1e-8
+    assert np.abs(fast.u - py.u).max() <= 1e-6
