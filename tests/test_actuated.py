@@ -213,3 +213,150 @@ def test_compiled_run_equals_python_engine_ur5():
     assert fast.ok and py.ok and fast.engine == "fast"
     assert np.abs(fast.q - py.q).max() <= 1e-8
     assert np.abs(fast.u - py.u).max() <= 1e-6
+
+
+# ---- a bounds file with an actuator part (the dict load_bounds returns for format rc3r-bounds/2) -------------
+
+def _bounds(robot, kinds, joint0, rel=0.05, jrel=0.3):
+    """The dict of :func:`rc3r.identify.bounds_file.load_bounds` for a /2 file, by hand: an ellipsoid inside the
+    box of half-widths ``rel |theta_r| + 1e-3`` and ``jrel |joint0| + 1e-3``, its rigid projection on top."""
+    from rc3r.identify.regressors import friction_names
+
+    p = robot.p
+    th = np.concatenate([robot.theta, joint0])
+    hw = np.concatenate([rel * np.abs(robot.theta), jrel * np.abs(joint0)]) + 1e-3
+    P = np.diag(1.0 / (th.size * hw ** 2))
+    C = np.linalg.inv(P)
+    Pr = np.linalg.inv(C[:p, :p])
+    act = {"kinds": list(kinds), "coulomb_velocity": V_S, "rigid_p": p,
+           "coefficient_names": tuple(robot.coefficient_names) + friction_names(kinds, robot.n),
+           "theta0": th, "P": P, "rho": float(np.sqrt(np.linalg.eigvalsh(C).max())), "rho_i": np.sqrt(np.diag(C))}
+    return {"theta0": robot.theta.copy(), "P": Pr, "rho": float(np.sqrt(np.linalg.eigvalsh(C[:p, :p]).max())),
+            "rho_i": np.sqrt(np.diag(C))[:p], "source": "hand.toml", "confidence": 0.95, "robot": robot.name,
+            "coefficient_names": tuple(robot.coefficient_names), "n": robot.n, "p": p, "actuator": act}
+
+
+@pytest.fixture
+def bounds_file(monkeypatch):
+    """``load_bounds`` returning a hand-built /2 dict for the 3R (viscous, Coulomb, offset)."""
+    import rc3r.identify.bounds_file as bf
+
+    arm = load_robot("rr3")
+    joint0 = np.concatenate([np.full(3, 2.0), np.full(3, 3.0), np.full(3, 0.5)])
+    holder = {"bf": _bounds(arm, KINDS[:3], joint0)}
+    monkeypatch.setattr(bf, "load_bounds", lambda path, robot=None: holder["bf"])
+    return holder
+
+
+def test_bounds_with_actuator_give_an_actuated_model_and_plants_in_the_full_ellipsoid(bounds_file):
+    """``--bounds`` with an actuator part: the controller's model is the ActuatedRobot at the centre (theta_0,
+    rho, rho_i over p + 3n coefficients); plant ``random:3`` lies in the full ellipsoid with fv, fc >= 0, and the
+    true plant's Friction effect carries exactly its joint coefficients; ``--friction`` with it is refused in one
+    line; ``nominal`` is the rigid centre without friction."""
+    bd = bounds_file["bf"]
+    act = bd["actuator"]
+    spec = rc3r.build_run(controller="robust", bounds="hand.toml", plant="random:3", perturbed=True, duration=0.1)
+    model, plant = spec.controller_model, spec.true_plant
+    assert isinstance(model, ActuatedRobot) and model.p == 24
+    np.testing.assert_array_equal(spec.law.theta, act["theta0"])
+    assert spec.law.rho == act["rho"]
+    rigid = plant.rigid
+    d = rigid.theta - act["theta0"]
+    assert d @ act["P"] @ d <= 1.0 + 1e-9
+    fr = plant.effect("friction")
+    np.testing.assert_array_equal(fr.viscous, rigid.coefficients("viscous"))
+    np.testing.assert_array_equal(fr.coulomb, rigid.coefficients("coulomb"))
+    np.testing.assert_array_equal(fr.offset, rigid.coefficients("offset"))
+    assert fr.v_s == V_S and np.all(fr.viscous >= 0) and np.all(fr.coulomb >= 0)
+    with pytest.raises(ConfigError, match="drop --friction"):
+        rc3r.build_run(controller="robust", bounds="hand.toml", plant="random:3", perturbed=True, friction="1:1")
+    nom = rc3r.build_run(controller="robust", bounds="hand.toml", plant="nominal", perturbed=True, duration=0.1)
+    assert nom.true_plant.effect("friction") is None and not np.any(nom.true_plant.rigid.joint)
+
+
+@pytest.mark.parametrize("law", ["robust", "fbl"])
+def test_friction_in_the_model_tracks_a_friction_plant_better(bounds_file, law):
+    """The same plant (plant ``random:3`` of the bounds: rigid body + viscous, Coulomb, offset friction), the
+    same law, once with the friction in the model (the bounds' actuator part) and once without (the rigid
+    bounds alone): with it, the largest tracking error is below 3/4 of the one without (measured over 2 s on the
+    python engine, continuous time: robust 1.26e-4 against 2.31e-4 rad, ratio 0.54; fbl 0.0258 against 0.0504
+    rad, ratio 0.51; sampled at 1 kHz with the rule's gains 0.54 and 0.51 too)."""
+    bd = bounds_file["bf"]
+    spec = rc3r.build_run(controller=law, bounds="hand.toml", plant="random:3", perturbed=True, duration=2.0,
+                          engine="python")
+    with_f = rc3r.simulate(spec.true_plant, spec.law, spec.trajectory, spec.options, model=spec.controller_model)
+    bounds_file["bf"] = {k: v for k, v in bd.items() if k != "actuator"}
+    rigid = rc3r.build_run(controller=law, bounds="hand.toml", plant="nominal", perturbed=True, duration=2.0,
+                           engine="python")
+    same = Plant(spec.true_plant.rigid.rigid, spec.true_plant.effects)  # the same rigid body and friction
+    without = rc3r.simulate(same, rigid.law, rigid.trajectory, rigid.options, model=rigid.controller_model)
+    assert with_f.ok and without.ok
+    e_with, e_without = np.abs(with_f.e).max(), np.abs(without.e).max()
+    assert e_with < 0.75 * e_without, (e_with, e_without)
+
+
+CC = shutil.which("cc")
+
+
+@pytest.mark.skipif(CC is None, reason="no C compiler (cc)")
+@pytest.mark.parametrize("name", ["rr3", "ur5"])
+def test_exported_c_regressor_equals_python_and_pinocchio(tmp_path, name):
+    """``rc3r export``'s regressor of an actuated model (the 3R's closed form, the UR5's chain, each renamed and
+    wrapped by :mod:`rc3r.robots.actuated_c`), built by cc: ``xi = Y^T r`` and ``u = w + Y th`` equal the python
+    regressor's at random states and th (1e-12 of the largest entry), and at th = theta_act, v = qd, w = 0, u is
+    rnea with armature + the friction law (1e-10)."""
+    import pinocchio as pin
+
+    from rc3r.export.c import regressor_source
+
+    arm = load_robot(name)
+    joint = _joint(arm.n)
+    act = ActuatedRobot(arm, KINDS, V_S, joint)
+    n, p = act.n, act.p
+    driver = tmp_path / "driver.c"
+    driver.write_text(f"#include <math.h>\n#include <stdio.h>\n#define RC3R_N {n}\n#define RC3R_P {p}\n"
+                      + regressor_source(act) + r"""
+int main(void)
+{
+    double q[RC3R_N], qd[RC3R_N], v[RC3R_N], a[RC3R_N], r[RC3R_N], w[RC3R_N], th[RC3R_P], xi[RC3R_P], u[RC3R_N];
+    rc3r_regressor wk;
+    int i;
+    for (;;) {
+        for (i = 0; i < RC3R_N; ++i)
+            if (scanf("%lf %lf %lf %lf %lf %lf", q + i, qd + i, v + i, a + i, r + i, w + i) != 6)
+                return 0;
+        for (i = 0; i < RC3R_P; ++i)
+            if (scanf("%lf", th + i) != 1)
+                return 1;
+        rc3r_regressor_eval(&wk, q, qd, v, a);
+        rc3r_regressor_xi(&wk, r, xi);
+        rc3r_regressor_apply(&wk, th, w, u);
+        for (i = 0; i < RC3R_P; ++i)
+            printf("%.17g ", xi[i]);
+        for (i = 0; i < RC3R_N; ++i)
+            printf("%.17g ", u[i]);
+        printf("\n");
+    }
+}
+""")
+    subprocess.run([CC, "-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-o", str(tmp_path / "driver"),
+                    str(driver), "-lm"], check=True)
+    rng = np.random.default_rng(7)
+    N = 20
+    X = rng.uniform(-2.0, 2.0, (6, N, n))  # q, qd, v, a, r, w
+    TH = rng.uniform(-1.0, 1.0, (N, p))
+    X[2, :2], X[5, :2], TH[:2] = X[1, :2], 0.0, act.theta  # two inverse-dynamics rows at the true coefficients
+    text = "\n".join(" ".join(repr(float(x)) for x in np.concatenate([X[:, s].T.ravel(), TH[s]])) for s in range(N))
+    out = subprocess.run([str(tmp_path / "driver")], input=text, capture_output=True, text=True, check=True).stdout
+    res = np.array([[float(x) for x in line.split()] for line in out.splitlines()])
+    assert res.shape == (N, p + n)
+    Y = act.regressor(X[0], X[1], X[2], X[3])
+    xi = np.einsum("sij,si->sj", Y, X[4])
+    u = np.einsum("sij,sj->si", Y, TH) + X[5]
+    assert np.abs(res[:, :p] - xi).max() <= 1e-12 * np.abs(xi).max()
+    assert np.abs(res[:, p:] - u).max() <= 1e-12 * np.abs(u).max()
+    model, fr = _reference(arm, joint)
+    data = model.createData()
+    ref = np.array([pin.rnea(model, data, X[0, s], X[1, s], X[3, s]) - fr.joint_torque(X[0, s], X[1, s])
+                    for s in range(2)])
+    assert np.abs(res[:2, p:] - ref).max() <= 1e-10 * np.abs(ref).max()
