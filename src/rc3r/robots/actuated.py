@@ -45,9 +45,11 @@ from .base import Robot
 
 __all__ = ["ActuatedRobot", "supply_module", "parse_kinds", "SUPPLY"]
 
-#: The template supply (wrapping the 3R's) and the inner supply its ``# inner supply`` lines name.
+#: The template supply and the inner supply its ``# inner supply`` line names as it stands.
 SUPPLY = "rc3r.robots.actuated_supply"
-_TEMPLATE_INNER = "rc3r.robots.rr3.engine"
+_TEMPLATE_INNER = "rc3r.robots.pinocchio_supply"
+#: The tangents section's stubs: from the first line to the second, replaced in a copy by the inner ones.
+_STUBS = ("# inner tangents: stubs", "# end of the inner tangents")
 _TANGENTS_MARK = "\n# ---- tangents (kept only"
 _MODULES: dict = {}
 
@@ -323,7 +325,7 @@ def _roots():
         yield Path(env) / "rc3r_supplies"
         return
     yield Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rc3r" / "supplies"
-    yield Path(tempfile.gettempdir()) / f"rc3r-supplies-{os.getuid() if hasattr(os, 'getuid') else 0}"
+    yield Path(tempfile.gettempdir()) / f"rc3r-supplies-{os.getuid() if os.name == 'posix' else 0}"
 
 
 def _write_once(path: Path, text: str) -> None:
@@ -343,15 +345,13 @@ def _write_once(path: Path, text: str) -> None:
 
 
 def supply_module(inner: str) -> str:
-    """The dotted name of :mod:`.actuated_supply` over the inner supply ``inner``, imported in this process.
+    """The dotted name of :mod:`.actuated_supply`'s copy over the inner supply ``inner``, imported in this process.
 
-    The template itself for the 3R's supply; for another, a copy with its ``# inner supply`` lines naming
-    ``inner`` (and without the tangents section if ``inner`` lacks ``tangents_into`` or
-    ``plant_tangents_into``), written once under ``$NUMBA_CACHE_DIR/rc3r_supplies`` (else the user's cache)
-    in a directory keyed by the text and :func:`rc3r._numba_cache.package_hash`, imported under a name of that
-    key (the compiled engine imports it by name: it is registered in ``sys.modules`` here first)."""
-    if inner == _TEMPLATE_INNER:
-        return SUPPLY
+    The copy has its ``# inner supply`` line naming ``inner`` and, if ``inner`` has ``tangents_into`` and
+    ``plant_tangents_into``, imports them in place of the template's stubs (else the tangents section is dropped:
+    no analytic derivatives). It is written once under ``$NUMBA_CACHE_DIR/rc3r_supplies`` (else the user's
+    cache) in a directory keyed by the text and :func:`rc3r._numba_cache.package_hash`, and imported under a
+    name of that key (the compiled engine imports it by name: it is registered in ``sys.modules`` here first)."""
     if inner in _MODULES:
         return _MODULES[inner]
     try:
@@ -360,9 +360,14 @@ def supply_module(inner: str) -> str:
         raise ParameterError(f"kernel supply {inner!r} cannot be imported: {exc}") from None
     template = (Path(__file__).resolve().parent / "actuated_supply.py").read_text()
     head, mark, tail = template.partition(_TANGENTS_MARK)
-    if not mark or template.count(f"from {_TEMPLATE_INNER} import") != 2:
+    stubs_a, stubs_b = tail.find(_STUBS[0]), tail.find(_STUBS[1])
+    if not mark or template.count(f"from {_TEMPLATE_INNER} import") != 1 or stubs_a < 0 or stubs_b < stubs_a:
         raise RuntimeError("rc3r.robots.actuated_supply lost its inner-supply lines")
-    source = head if not (hasattr(mod, "tangents_into") and hasattr(mod, "plant_tangents_into")) else template
+    if all(hasattr(mod, f) for f in ("tangents_into", "plant_tangents_into")):
+        source = (head + mark + tail[:stubs_a] + f"from {inner} import plant_tangents_into as _i_ptangents, "
+                  "tangents_into as _i_tangents  # noqa: E402 inner supply (tangents)\n" + tail[stubs_b:])
+    else:
+        source = head
     source = source.replace(f"from {_TEMPLATE_INNER} import", f"from {inner} import")
     h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{inner}\0".encode() + source.encode())
     file_ = getattr(mod, "__file__", None)

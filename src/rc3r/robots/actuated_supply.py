@@ -1,11 +1,12 @@
 r"""The kernel supply of an :class:`~rc3r.robots.actuated.ActuatedRobot`: a rigid body's supply plus joint friction
 and rotor inertia (armature), a template.
 
-It wraps an inner supply (:mod:`rc3r.simulate.engines._template`) named on its ``# inner supply`` lines: as
-it stands the 3R's (:mod:`rc3r.robots.rr3.engine`), so this module is itself the supply of an actuated 3R;
-:func:`rc3r.robots.actuated.supply_module` writes a copy per other inner supply (a serial chain's,
-:mod:`rc3r.robots.pinocchio_supply`) with those lines naming it, and drops the section after
-``# ---- tangents`` when the inner supply has no analytic derivatives. Constants::
+It wraps an inner supply (:mod:`rc3r.simulate.engines._template`) named on its ``# inner supply`` line (as it
+stands a serial chain's, :mod:`rc3r.robots.pinocchio_supply`). It is a template, never a supply itself:
+:func:`rc3r.robots.actuated.supply_module` writes a copy per inner supply with that line naming it, and either
+imports the inner supply's ``tangents_into`` and ``plant_tangents_into`` in place of the two stubs of the
+tangents section (the 3R's closed form has them) or drops that section (the chain has none: the engine then
+differentiates numerically). Constants::
 
     kc = [inner kc (K) | n, p_r, v_s, s_fv, s_fc, s_f0, s_ia | plant fv (n), fc (n), f0 (n), ia (n) | K]
 
@@ -25,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rc3r.robots.rr3.engine import apply_into as _i_apply, forward_dynamics_into as _i_fd, make_work as _i_make_work, mass_into as _i_mass, passes_into as _i_passes, regressor_into as _i_regressor, xi_into as _i_xi  # inner supply
+from rc3r.robots.pinocchio_supply import apply_into as _i_apply, forward_dynamics_into as _i_fd, make_work as _i_make_work, mass_into as _i_mass, passes_into as _i_passes, regressor_into as _i_regressor, xi_into as _i_xi  # inner supply
 
 __all__ = ["make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into",
            "mass_into", "HEAD"]
@@ -223,7 +224,17 @@ def forward_dynamics_into(kc, q, qd, tau, qdd, wk):
 
 
 # ---- tangents (kept only when the inner supply has analytic derivatives)
-from rc3r.robots.rr3.engine import plant_tangents_into as _i_ptangents, tangents_into as _i_tangents  # noqa: E402 inner supply (tangents)
+# inner tangents: stubs here; a copy over a supply with derivatives imports its functions in their place
+@njit(**_JIT)
+def _i_tangents(kc, th, q, qd, v, a, D, wk):
+    return False
+
+
+@njit(**_JIT)
+def _i_ptangents(kc, q, qd, qdd, D, wk):
+    return False
+# end of the inner tangents
+
 
 __all__ += ["tangents_into", "plant_tangents_into"]
 
