@@ -360,3 +360,34 @@ int main(void)
     ref = np.array([pin.rnea(model, data, X[0, s], X[1, s], X[3, s]) - fr.joint_torque(X[0, s], X[1, s])
                     for s in range(2)])
     assert np.abs(res[:2, p:] - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def test_model_friction_config_covers_its_ranges():
+    """``[model] friction`` (numbers here; "urdf" reads <dynamics>): the controller's theta_0 ends with the
+    intervals' centres (nominal x (0.5 + 1.5) / 2), rho_i with their half-widths (0.5 x nominal), rho is the
+    ball around the product hypot(rho of the rigid box, ||half-widths||), computed here by hand; plant
+    ``random:3`` draws each coefficient inside its interval (seeded: the same twice) and carries them as its
+    Friction effect; bad values are one-line ConfigErrors."""
+    fr = {"viscous": 2.0, "coulomb": [1.0, 2.0, 3.0]}
+    law = "robust-coeff"
+    base = rc3r.build_run(controller=law, config={"perturbed": True}, plant="random:3", duration=0.1)
+    spec = rc3r.build_run(controller=law, config={"perturbed": True, "model": {"friction": fr}}, plant="random:3",
+                          duration=0.1)
+    nom = np.array([2.0, 2.0, 2.0, 1.0, 2.0, 3.0])
+    assert isinstance(spec.controller_model, ActuatedRobot) and spec.controller_model.p == 21
+    np.testing.assert_array_equal(spec.law.theta[15:], nom)
+    np.testing.assert_allclose(spec.model["rho_i"][15:], 0.5 * nom, rtol=1e-15)
+    robust = rc3r.build_run(controller="robust", config={"perturbed": True, "model": {"friction": fr}},
+                            plant="random:3", duration=0.1)
+    rigid = rc3r.build_run(controller="robust", config={"perturbed": True}, plant="random:3", duration=0.1)
+    assert robust.model["rho"] == pytest.approx(np.sqrt(rigid.model["rho"] ** 2 + np.sum((0.5 * nom) ** 2)), rel=1e-14)
+    joint = spec.true_plant.rigid.joint
+    assert np.all(joint >= 0.5 * nom) and np.all(joint <= 1.5 * nom) and np.any(joint != nom)
+    np.testing.assert_array_equal(spec.true_plant.effect("friction").viscous, joint[:3])
+    np.testing.assert_array_equal(spec.true_plant.rigid.rigid.theta, base.true_rigid.theta)  # the same rigid draw
+    again = rc3r.build_run(controller=law, config={"perturbed": True, "model": {"friction": fr}}, plant="random:3")
+    np.testing.assert_array_equal(again.true_plant.rigid.joint, joint)
+    for bad, msg in (({"viscous": -1.0}, ">= 0"), ({"coulomb": "urdf"}, "no <dynamics friction>"),
+                     ({"viscous": 1.0, "range": [1.2, 2.0]}, "range"), ({"viscous": 1.0, "stiction": 1}, "unknown key")):
+        with pytest.raises(ConfigError, match=msg):
+            rc3r.build_run(controller="robust", config={"perturbed": True, "model": {"friction": bad}})

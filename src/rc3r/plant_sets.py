@@ -270,3 +270,80 @@ def with_joint_friction(true_plant, rigid):
         raise ConfigError("the plant drawn from the bounds carries its identified friction: drop --friction / "
                           "[plant] friction")
     return Plant(true_plant.rigid, own + tuple(true_plant.effects), label=true_plant._label)
+
+
+#: ``[model] friction``'s default relative range of every joint coefficient (its nominal times lo..hi).
+FRICTION_RANGE = (0.5, 1.5)
+_MODEL_FRICTION_KEYS = ("viscous", "coulomb", "offset", "armature", "v_s", "range")
+
+
+def _model_friction_values(nominal, cfg):
+    """``(kinds, v_s, joint0 (n m,), (lo, hi))`` of a ``[model] friction`` value (``"urdf"`` or a table)."""
+    from .robots.actuated import parse_kinds
+
+    if cfg == "urdf":
+        cfg = {"viscous": "urdf", "coulomb": "urdf"}
+    if not isinstance(cfg, dict):
+        raise ConfigError(f"[model] friction must be \"urdf\" or a table ({', '.join(_MODEL_FRICTION_KEYS)}), got {cfg!r}")
+    unknown = sorted(set(cfg) - set(_MODEL_FRICTION_KEYS))
+    if unknown:
+        raise ConfigError(f"[model.friction]: unknown key(s) {', '.join(unknown)} (valid: {', '.join(_MODEL_FRICTION_KEYS)})")
+    kinds = parse_kinds([k for k in ("viscous", "coulomb", "offset", "armature") if k in cfg])
+    if not kinds:
+        raise ConfigError("[model.friction] names no coefficient (viscous, coulomb, offset, armature)")
+    n, vals = nominal.n, []
+    for k in kinds:
+        v = cfg[k]
+        if v == "urdf" and k in ("viscous", "coulomb"):
+            v = np.array(nominal.model.damping if k == "viscous" else nominal.model.friction, dtype=float)
+            if v.size != n or not np.any(v):
+                raise ConfigError(f"[model.friction] {k} = \"urdf\": robot '{nominal.label}' has no <dynamics "
+                                  f"{'damping' if k == 'viscous' else 'friction'}> (give numbers)")
+        try:
+            v = np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy()
+        except (TypeError, ValueError):
+            raise ConfigError(f"[model.friction] {k} must be \"urdf\" (viscous, coulomb), one number or {n}, "
+                              f"got {cfg[k]!r}") from None
+        if not np.all(np.isfinite(v)) or (k != "offset" and np.any(v < 0)):
+            raise ConfigError(f"[model.friction] {k} must be finite{' and >= 0' if k != 'offset' else ''}, got {v.tolist()}")
+        vals.append(v)
+    rng_ = cfg.get("range", FRICTION_RANGE)
+    try:
+        lo, hi = (float(x) for x in rng_)
+    except (TypeError, ValueError):
+        lo = hi = float("nan")
+    if not (0.0 <= lo <= 1.0 <= hi < np.inf):
+        raise ConfigError(f"[model.friction] range must be [lo, hi] with 0 <= lo <= 1 <= hi, got {rng_!r}")
+    v_s = float(cfg.get("v_s", 0.05))
+    if not (np.isfinite(v_s) and v_s > 0):
+        raise ConfigError(f"[model.friction] v_s must be > 0 [rad/s], got {cfg.get('v_s')!r}")
+    return kinds, v_s, np.concatenate(vals), (lo, hi)
+
+
+def with_model_friction(nominal, the_plant, model: dict, cfg, spec: str, perturbed: bool):
+    """``(model_robot, plant, model)`` with the joint coefficients of ``[model] friction`` (docs/control.md):
+    each coefficient lies in ``[lo, hi]`` times its nominal value (the URDF's ``<dynamics damping friction>`` or
+    the table's numbers; ``range``, default :data:`FRICTION_RANGE`), so theta_0's joint part is the centre of
+    those intervals, rho_i their half-widths and rho = sqrt(rho_r^2 + sum rho_i,joint^2) (the ball around the
+    product of the rigid set and the intervals). The plant carries the nominal values, or for ``random:<seed>``
+    a uniform draw in the intervals (generator ``SeedSequence([seed, 35])``); an ideal run's model is the plant."""
+    from .robots.actuated import ActuatedRobot
+
+    kinds, v_s, j0, (lo, hi) = _model_friction_values(nominal, cfg)
+    a, b = np.minimum(lo * j0, hi * j0), np.maximum(lo * j0, hi * j0)
+    kind, _, arg = str(spec).partition(":")
+    joint = j0
+    if kind == "random" and arg.isdigit():
+        joint = np.random.default_rng(np.random.SeedSequence([int(arg), 35])).uniform(a, b)
+    plant = ActuatedRobot(the_plant, kinds, v_s, joint, label=the_plant.label)
+    centre, half = 0.5 * (a + b), 0.5 * (b - a)
+    th_j = centre if perturbed else joint
+    out = dict(model, theta0=list(model["theta0"]) + th_j.tolist(),
+               friction_source=f"{', '.join(kinds)} in {lo:g}..{hi:g} x nominal, v_s = {v_s:g} rad/s")
+    if model.get("rho") is not None:
+        out["rho"] = float(np.hypot(model["rho"], np.linalg.norm(half)))
+    if model.get("rho_i") is not None:
+        out["rho_i"] = list(model["rho_i"]) + half.tolist()
+    if model.get("P") is not None:
+        raise ConfigError("[model] friction with an ellipsoid P: use a bounds file with an actuator part")
+    return ActuatedRobot(nominal, kinds, v_s, th_j, label=nominal.label), plant, out

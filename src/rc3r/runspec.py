@@ -40,7 +40,7 @@ from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
 from .uncertainty import certified_radius
 from .plant_sets import (_actuated_bounds_plant, _Bounds, _bounds_plant, _drawn, _payload, _plant, actuated_model,
-                         resolve_box, with_joint_friction)
+                         resolve_box, with_joint_friction, with_model_friction)
 
 __all__ = ["RunSpec", "build_run", "design_warning", "execute", "resolve_box", "CONFIG_KEYS"]
 
@@ -113,7 +113,7 @@ CONFIG_KEYS = {
     "payload": ("mass", "com"),
     "design": ("verified", "law", "rate", "margin", "worst_plant", "loop_gain", "note"),
     "plant": ("spec", "urdf", "box", "urdf_uncertainty") + PLANT_KEYS,  # the effects' keys, live
-    "model": ("theta", "rho"),
+    "model": ("theta", "rho", "friction"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
     "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "period_rtol", "period_atol", "nsub",
                    "sampled_method", "engine", "jac_reuse", "method", "max_steps", "q_max", "qd_max", "u_max"),
@@ -360,6 +360,12 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
             _model(LAWS[kind], the_plant, box_bounds, False, model_cfg)
     else:
         model = _model(LAWS[kind], the_plant, box_bounds, perturbed, model_cfg)
+    if model_cfg.get("friction") is not None:  # joint coefficients with a range (docs/control.md)
+        if act:
+            raise ConfigError("[model] friction and a bounds file with joint coefficients: give one")
+        model_robot, the_plant, model = with_model_friction(nominal, the_plant, model, model_cfg["friction"], spec,
+                                                            perturbed)
+        act = True
     traj_cfg = dict(cfg.get("trajectory", {}))
     traj = trajectory_from_config(traj_cfg, nominal.default_trajectory())
     warnings = []
@@ -369,7 +375,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")
     sim = dict(cfg.get("simulation", {}))
     if bounds_path is None:  # a bounds file's centre was checked when it was read
-        _check_model_mass(nominal, model, traj, duration if duration is not None else sim.get("duration"), None,
+        _check_model_mass(model_robot, model, traj, duration if duration is not None else sim.get("duration"), None,
                           model_cfg.get("theta"))
     if rate is not None:
         sim["rate"] = rate
