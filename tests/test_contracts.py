@@ -74,6 +74,8 @@ ALLOWED = {
     ("robots/pinocchio.py", "<dynamic>"): "a pinocchio function by name",
     ("robots/__init__.py", "<dynamic>"): "a registered robot class, imported by its dotted name",
     ("robots/generated.py", "<dynamic>"): "a compiled library's function by name",
+    ("robots/actuated.py", "<dynamic>"): "an inner kernel supply is a user module: its optional derivatives by name",
+    ("robots/actuated.py", "__file__"): "an inner kernel supply is a user module (its source joins the cache key)",
     ("robots/rr3/robot.py", "_pin_data"): "the robot's own lazily built work data",
     ("cli/__init__.py", "<dynamic>"): "a sub-command's function, imported by name",
     ("cli/model.py", "lock"): ARGPARSE,

@@ -32,6 +32,9 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.robots.base_parameters``        numerical base parameters of a Pinocchio model
 ``rc3r.robots.pinocchio_kernel``       compiled Slotine--Li regressor of a serial chain
 ``rc3r.robots.pinocchio_supply``       a chain's kernel supply of the compiled engine (Y^T r, Y theta in O(n))
+``rc3r.robots.actuated``               ActuatedRobot: any robot plus per-joint friction and armature coefficients
+``rc3r.robots.actuated_supply``        its compiled kernel supply, a template over the rigid body's supply
+``rc3r.robots.actuated_c``             its C99 regressor for rc3r export (the rigid body's plus the joint columns)
 ``rc3r.urdf_names``                    URDF files by name: example-robot-data's directory, ``erd:`` names, --lock advice
 ``rc3r.robots.generated``              generated C kernels of any arm (CasADi SX -> C, cached on disk)
 ``rc3r.robots.generated_chain``        what is generated (``FUNCTIONS``) and from what (a chain's constants)

@@ -182,3 +182,168 @@ def _payload_plant(nominal, payload, spec: str, uset=None):
     else:
         raise ConfigError(f"bad plant {spec!r} with a payload: expected upper, lower, random:<seed>, mass:<kg>")
     return with_payload(nominal, m, com, label=f"{nominal.label} + payload {m:g} kg")
+
+
+def actuated_model(nominal, act: dict, label: str = "nominal"):
+    """The controller's :class:`~rc3r.robots.actuated.ActuatedRobot` of a bounds file's ``actuator`` part (``bf
+    ["actuator"]`` of :func:`rc3r.identify.bounds_file.load_bounds`): ``nominal`` with the joint coefficients of its
+    centre ``theta0[p:]``."""
+    from .robots.actuated import ActuatedRobot
+
+    theta0 = np.asarray(act["theta0"], dtype=float)
+    if int(act.get("rigid_p", nominal.p)) != nominal.p or theta0.size <= nominal.p:
+        raise ConfigError(f"the actuator part of the bounds has {theta0.size} coefficients over {act.get('rigid_p')} "
+                          f"rigid ones; robot '{nominal.label}' has {nominal.p}")
+    return ActuatedRobot(nominal, act["kinds"], float(act["coulomb_velocity"]), theta0[nominal.p:], label=label)
+
+
+def _joint_issue(model, joint) -> str | None:
+    """Why ``joint`` coefficients are no plant's (negative viscous, Coulomb or armature), or None."""
+    issues = [i for i in model.with_joint(joint).physical_issues() if i.startswith("negative")]
+    return issues[0] if issues else None
+
+
+def _actuated_bounds_plant(nominal, bf: dict, spec: str):
+    """A plant drawn from the ellipsoid over rigid **and** joint coefficients (``bf["actuator"]``): an
+    :class:`~rc3r.robots.actuated.ActuatedRobot` (its armature in the rigid body; its friction becomes the plant's
+    Friction effect, :func:`with_joint_friction`). ``centre``: the rigid centre (as :func:`_bounds_plant`) and the
+    joint centre; ``random:<s>``/``boundary:<s>``: theta drawn in the full ellipsoid, redrawn (same seeded stream)
+    until its joint part is physical (fv, fc, ia >= 0) and its rigid part realised by a simulable robot;
+    ``lightest:...``: the full ellipsoid's lightest point, its joint part clipped at 0 where negative."""
+    from .errors import ParameterError
+    from .uncertainty.box import spec_seed
+    from .uncertainty.ellipsoid import MAX_DRAWS, draw_theta, lightest_theta, realise_theta
+
+    act, p = bf["actuator"], nominal.p
+    model = actuated_model(nominal, act)
+    theta0, P = np.asarray(act["theta0"], dtype=float), np.asarray(act["P"], dtype=float)
+    source = f"bounds file {bf['source']}"
+    kind, _, arg = str(spec).strip().partition(":")
+    kind = kind.lower()
+    if kind in ("centre", "center") and not arg:
+        why = _joint_issue(model, theta0[p:])
+        if why:
+            raise ParameterError(f"the centre of {source} is no plant: {why}")
+        return model.with_rigid(_bounds_plant(nominal, bf, spec), "centre")
+    if kind == "lightest":
+        theta = lightest_theta(model, theta0, P, arg, spec)
+        joint = theta[p:].copy()
+        for k in ("viscous", "coulomb", "armature"):
+            if k in model.kinds:
+                i = model.kinds.index(k)
+                joint[i * nominal.n:(i + 1) * nominal.n] = np.maximum(joint[i * nominal.n:(i + 1) * nominal.n], 0.0)
+        try:
+            rigid = realise_theta(nominal, theta[:p], label=spec)
+            rigid.require_simulable()
+        except ParameterError as exc:
+            raise ParameterError(f"plant {spec!r}: no simulable robot near '{nominal.label}' realises it: {exc}") from None
+        return model.with_rigid(rigid, spec).with_joint(joint, spec)
+    if kind not in ("random", "boundary"):
+        from .uncertainty.ellipsoid import ELLIPSOID_SPECS
+
+        raise ConfigError(f"bad plant {spec!r} with bounds from {source}: expected nominal, {ELLIPSOID_SPECS}")
+    rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad plant"))
+    for _ in range(MAX_DRAWS):
+        theta = draw_theta(theta0, P, rng, boundary=kind == "boundary")
+        if _joint_issue(model, theta[p:]):
+            continue
+        try:
+            rigid = realise_theta(nominal, theta[:p], label=spec)
+            rigid.require_simulable()
+        except ParameterError:
+            continue
+        return model.with_rigid(rigid, spec).with_joint(theta[p:], spec)
+    raise ParameterError(f"plant {spec!r}: no physical plant (fv, fc, ia >= 0, a simulable rigid body) realises "
+                         f"any of {MAX_DRAWS} draws from the ellipsoid of {source}")
+
+
+def with_joint_friction(true_plant, rigid):
+    """``true_plant`` (a :class:`~rc3r.plants.Plant` on the rigid body ``rigid``) with the Friction effect of
+    ``rigid``'s joint coefficients (an :class:`~rc3r.robots.actuated.ActuatedRobot`); ConfigError if the plant
+    already has a friction effect (``--friction``, ``[plant] friction``: the bounds' plants carry their own)."""
+    from .plants import Plant
+
+    own = rigid.as_plant().effects
+    if not own:
+        return true_plant
+    if true_plant.effect("friction") is not None:
+        raise ConfigError("the plant drawn from the bounds carries its identified friction: drop --friction / "
+                          "[plant] friction")
+    return Plant(true_plant.rigid, own + tuple(true_plant.effects), label=true_plant._label)
+
+
+#: ``[model] friction``'s default relative range of every joint coefficient (its nominal times lo..hi).
+FRICTION_RANGE = (0.5, 1.5)
+_MODEL_FRICTION_KEYS = ("viscous", "coulomb", "offset", "armature", "v_s", "range")
+
+
+def _model_friction_values(nominal, cfg):
+    """``(kinds, v_s, joint0 (n m,), (lo, hi))`` of a ``[model] friction`` value (``"urdf"`` or a table)."""
+    from .robots.actuated import parse_kinds
+
+    if cfg == "urdf":
+        cfg = {"viscous": "urdf", "coulomb": "urdf"}
+    if not isinstance(cfg, dict):
+        raise ConfigError(f"[model] friction must be \"urdf\" or a table ({', '.join(_MODEL_FRICTION_KEYS)}), got {cfg!r}")
+    unknown = sorted(set(cfg) - set(_MODEL_FRICTION_KEYS))
+    if unknown:
+        raise ConfigError(f"[model.friction]: unknown key(s) {', '.join(unknown)} (valid: {', '.join(_MODEL_FRICTION_KEYS)})")
+    kinds = parse_kinds([k for k in ("viscous", "coulomb", "offset", "armature") if k in cfg])
+    if not kinds:
+        raise ConfigError("[model.friction] names no coefficient (viscous, coulomb, offset, armature)")
+    n, vals = nominal.n, []
+    for k in kinds:
+        v = cfg[k]
+        if v == "urdf" and k in ("viscous", "coulomb"):
+            v = np.array(nominal.model.damping if k == "viscous" else nominal.model.friction, dtype=float)
+            if v.size != n or not np.any(v):
+                raise ConfigError(f"[model.friction] {k} = \"urdf\": robot '{nominal.label}' has no <dynamics "
+                                  f"{'damping' if k == 'viscous' else 'friction'}> (give numbers)")
+        try:
+            v = np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy()
+        except (TypeError, ValueError):
+            raise ConfigError(f"[model.friction] {k} must be \"urdf\" (viscous, coulomb), one number or {n}, "
+                              f"got {cfg[k]!r}") from None
+        if not np.all(np.isfinite(v)) or (k != "offset" and np.any(v < 0)):
+            raise ConfigError(f"[model.friction] {k} must be finite{' and >= 0' if k != 'offset' else ''}, got {v.tolist()}")
+        vals.append(v)
+    rng_ = cfg.get("range", FRICTION_RANGE)
+    try:
+        lo, hi = (float(x) for x in rng_)
+    except (TypeError, ValueError):
+        lo = hi = float("nan")
+    if not (0.0 <= lo <= 1.0 <= hi < np.inf):
+        raise ConfigError(f"[model.friction] range must be [lo, hi] with 0 <= lo <= 1 <= hi, got {rng_!r}")
+    v_s = float(cfg.get("v_s", 0.05))
+    if not (np.isfinite(v_s) and v_s > 0):
+        raise ConfigError(f"[model.friction] v_s must be > 0 [rad/s], got {cfg.get('v_s')!r}")
+    return kinds, v_s, np.concatenate(vals), (lo, hi)
+
+
+def with_model_friction(nominal, the_plant, model: dict, cfg, spec: str, perturbed: bool):
+    """``(model_robot, plant, model)`` with the joint coefficients of ``[model] friction`` (docs/control.md):
+    each coefficient lies in ``[lo, hi]`` times its nominal value (the URDF's ``<dynamics damping friction>`` or
+    the table's numbers; ``range``, default :data:`FRICTION_RANGE`), so theta_0's joint part is the centre of
+    those intervals, rho_i their half-widths and rho = sqrt(rho_r^2 + sum rho_i,joint^2) (the ball around the
+    product of the rigid set and the intervals). The plant carries the nominal values, or for ``random:<seed>``
+    a uniform draw in the intervals (generator ``SeedSequence([seed, 35])``); an ideal run's model is the plant."""
+    from .robots.actuated import ActuatedRobot
+
+    kinds, v_s, j0, (lo, hi) = _model_friction_values(nominal, cfg)
+    a, b = np.minimum(lo * j0, hi * j0), np.maximum(lo * j0, hi * j0)
+    kind, _, arg = str(spec).partition(":")
+    joint = j0
+    if kind == "random" and arg.isdigit():
+        joint = np.random.default_rng(np.random.SeedSequence([int(arg), 35])).uniform(a, b)
+    plant = ActuatedRobot(the_plant, kinds, v_s, joint, label=the_plant.label)
+    centre, half = 0.5 * (a + b), 0.5 * (b - a)
+    th_j = centre if perturbed else joint
+    out = dict(model, theta0=list(model["theta0"]) + th_j.tolist(),
+               friction_source=f"{', '.join(kinds)} in {lo:g}..{hi:g} x nominal, v_s = {v_s:g} rad/s")
+    if model.get("rho") is not None:
+        out["rho"] = float(np.hypot(model["rho"], np.linalg.norm(half)))
+    if model.get("rho_i") is not None:
+        out["rho_i"] = list(model["rho_i"]) + half.tolist()
+    if model.get("P") is not None:
+        raise ConfigError("[model] friction with an ellipsoid P: use a bounds file with an actuator part")
+    return ActuatedRobot(nominal, kinds, v_s, th_j, label=nominal.label), plant, out

@@ -39,7 +39,8 @@ from .simulate import SimOptions, SimResult, simulate
 from .simulate.metrics import run_metrics
 from .trajectory import trajectory_from_config
 from .uncertainty import certified_radius
-from .plant_sets import _Bounds, _bounds_plant, _drawn, _payload, _plant, resolve_box
+from .plant_sets import (_actuated_bounds_plant, _Bounds, _bounds_plant, _drawn, _payload, _plant, actuated_model,
+                         resolve_box, with_joint_friction, with_model_friction)
 
 __all__ = ["RunSpec", "build_run", "design_warning", "execute", "resolve_box", "CONFIG_KEYS"]
 
@@ -112,7 +113,7 @@ CONFIG_KEYS = {
     "payload": ("mass", "com"),
     "design": ("verified", "law", "rate", "margin", "worst_plant", "loop_gain", "note"),
     "plant": ("spec", "urdf", "box", "urdf_uncertainty") + PLANT_KEYS,  # the effects' keys, live
-    "model": ("theta", "rho"),
+    "model": ("theta", "rho", "friction"),
     "trajectory": ("kind", "offset", "terms", "waypoints", "durations"),
     "simulation": ("duration", "rate", "output_rate", "rtol", "atol", "period_rtol", "period_atol", "nsub",
                    "sampled_method", "engine", "jac_reuse", "method", "max_steps", "q_max", "qd_max", "u_max"),
@@ -347,14 +348,24 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
             _check_model_mass(nominal, {"theta0": bounds_file["theta0"]},
                               trajectory_from_config(dict(cfg.get("trajectory", {})), nominal.default_trajectory()),
                               dur, bounds_path, None)
-    the_plant = (_bounds_plant(nominal, bounds_file, spec) if bounds_path is not None and _drawn(spec)
-                 else _plant(nominal, box_bounds, spec, seed))
+    act = bounds_file.get("actuator") if bounds_path is not None and (file_model or _drawn(spec)) else None
+    model_robot = actuated_model(nominal, act) if act else nominal  # friction, armature: docs/control.md
+    the_plant = ((_actuated_bounds_plant if act else _bounds_plant)(nominal, bounds_file, spec)
+                 if bounds_path is not None and _drawn(spec) else _plant(nominal, box_bounds, spec, seed))
+    if act and the_plant.p != model_robot.p:  # a plant of the rigid body alone: no joint coefficients
+        the_plant = model_robot.with_rigid(the_plant).with_joint(None)
     if bounds_path is not None:
         perturbed = file_model
-        model = _file_model(LAWS[kind], bounds_file, nominal) if perturbed else \
+        model = _file_model(LAWS[kind], dict(bounds_file, **(act or {})), nominal) if perturbed else \
             _model(LAWS[kind], the_plant, box_bounds, False, model_cfg)
     else:
         model = _model(LAWS[kind], the_plant, box_bounds, perturbed, model_cfg)
+    if model_cfg.get("friction") is not None:  # joint coefficients with a range (docs/control.md)
+        if act:
+            raise ConfigError("[model] friction and a bounds file with joint coefficients: give one")
+        model_robot, the_plant, model = with_model_friction(nominal, the_plant, model, model_cfg["friction"], spec,
+                                                            perturbed)
+        act = True
     traj_cfg = dict(cfg.get("trajectory", {}))
     traj = trajectory_from_config(traj_cfg, nominal.default_trajectory())
     warnings = []
@@ -364,7 +375,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         raise ConfigError(f"trajectory has {traj.n} joints, robot '{nominal.label}' has {the_plant.n}")
     sim = dict(cfg.get("simulation", {}))
     if bounds_path is None:  # a bounds file's centre was checked when it was read
-        _check_model_mass(nominal, model, traj, duration if duration is not None else sim.get("duration"), None,
+        _check_model_mass(model_robot, model, traj, duration if duration is not None else sim.get("duration"), None,
                           model_cfg.get("theta"))
     if rate is not None:
         sim["rate"] = rate
@@ -387,6 +398,8 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
                                    if v is not None})
     true_plant, loop, _ = resolve(the_plant, plant_cfg, seed=seed, rng=plant_rng, noise=noise, delay=delay,
                                   plant_engine=plant_engine, **given)
+    if act:
+        true_plant = with_joint_friction(true_plant, the_plant)
     if loop is not None and loop.active and opts.rate is None:
         raise ConfigError("sensor noise, quantization and delay act on a sampled controller: give a rate (--rate HZ)")
     table = dict(cfg.get("gains", {}).get(kind, {}))
@@ -394,13 +407,13 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         # defaults that work: no gain given for a sampled run -> the sampled-data rule's (docs/design.md)
         from .design.rule import sampled_gains
 
-        table, note = sampled_gains(kind, nominal, traj, model, opts.rate, duration=opts.duration,
+        table, note = sampled_gains(kind, model_robot, traj, model, opts.rate, duration=opts.duration,
                                     delay=0 if loop is None else int(loop.delay))
         if note is not None:
             model = {**model, "gains_source": note}
     law = _law(kind, model, ctrl_cfg, eps, table or {})
     return RunSpec(name or f"{kind}-{scenario}", the_plant, law, traj, opts, seed, scenario, model, tuple(warnings),
-                   true_plant, loop, nominal, tolerance)
+                   true_plant, loop, model_robot, tolerance)
 
 
 def _tolerance(tol) -> float | None:

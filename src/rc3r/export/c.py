@@ -50,13 +50,20 @@ def regressor_source(model) -> str:
     """The C source of ``model``'s regressor (module docstring, the regressor contract).
 
     ``model.c_regressor_source()`` if the robot class has one (the 3R's closed form), else the
-    generic chain of :mod:`rc3r.export.chain` for a model with a supported ``ChainKernel``.
+    generic chain of :mod:`rc3r.export.chain` for a model with a supported ``ChainKernel``; for an
+    :class:`~rc3r.robots.actuated.ActuatedRobot` its rigid body's, wrapped by :mod:`rc3r.robots.actuated_c`.
 
     Raises
     ------
     ConfigError
         A robot with neither (a helical joint, a robot class without a C regressor).
     """
+    from ..robots.actuated import ActuatedRobot
+
+    if isinstance(model, ActuatedRobot):  # the rigid body's C, renamed, plus the joint columns
+        from ..robots.actuated_c import c_regressor_source
+
+        return c_regressor_source(model, regressor_source(model.rigid))
     if model.c_regressor_source is not None:  # declared by every robot (rc3r.robots.base.Robot)
         return model.c_regressor_source()
     from .chain import chain_source
