@@ -41,9 +41,10 @@ import numpy as np
 from ..errors import ConfigError
 from . import filtering as _flt
 from .estimate import WEIGHTINGS
-from .regressors import coulomb, friction_columns, identification_regressor
+from .regressors import coulomb, identification_regressor, joint_columns, kept_columns
 
 __all__ = ["FOLDS", "GUARD", "COULOMB_VELOCITIES", "COULOMB_START", "CV_RATE_FACTOR", "CV_COARSE_FACTOR",
+           "ARMATURE_GAIN",
            "filtered_rows",
            "predict_rows", "cv_scores", "select"]
 
@@ -73,16 +74,23 @@ CV_COARSE_FACTOR = 4.0
 #: folds' fits at 2 Hz on a 10 s log: scores 4x the held-out RMS, 2 Hz never chosen.)
 GUARD = 1.5
 
+#: The model with a rotor inertia per joint is chosen only when its score is lower by more than this share
+#: (the simpler model wins ties: on arms without rotor inertia the two score within noise, 1e-3 on the 3R).
+ARMATURE_GAIN = 0.01
+
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
 
 
-def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dict | None = None) -> np.ndarray:
-    """``L[Y | friction]`` (K, n, m) on the coarse grid (friction filtered at the full rate).
+def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dict | None = None,
+                  columns=None) -> np.ndarray:
+    """``L[Y | joint columns]`` (K, n, m) on the coarse grid (friction filtered at the full rate).
 
-    ``arm_rows``: ``L[Y]`` (K, n, p) when already computed (only the friction columns depend on
-    ``v_s``); ``memo``: a dict that keeps the filtered viscous and offset columns between calls on
-    the same ``prep``.
+    ``kinds`` in :data:`~rc3r.identify.regressors.JOINT_KINDS` order (the armature column, ``qdd``, is
+    filtered on the coarse grid like ``Y``); ``columns``: only these joint columns
+    (:func:`~rc3r.identify.regressors.kept_columns`). ``arm_rows``: ``L[Y]`` (K, n, p) when already
+    computed (only the friction columns depend on ``v_s``); ``memo``: a dict that keeps the filtered
+    viscous, offset and armature columns between calls on the same ``prep``.
     """
     LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd)) if arm_rows is None else arm_rows
     n = prep.q.shape[1]
@@ -95,15 +103,18 @@ def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dic
             col = prep.filter_full(coulomb(qd, v_s))
         else:
             if kind not in memo:
-                memo[kind] = prep.filter_full(qd if kind == "viscous" else np.ones_like(qd))
+                memo[kind] = (prep.filter_coarse(prep.qdd) if kind == "armature" else
+                              prep.filter_full(qd if kind == "viscous" else np.ones_like(qd)))
             col = memo[kind]
         LF[:, idx, k * n + idx] = col[:LY.shape[0]]
+    if columns is not None:
+        LF = LF[:, :, np.asarray(columns, dtype=int)]
     return np.concatenate([np.asarray(LY, dtype=float), LF], axis=2)
 
 
-def predict_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
-    """``[Y | friction]`` (K, n, m) on the coarse grid at the prediction states (low-passed at the cut-off)."""
-    return identification_regressor(robot, *prep.predict, kinds, v_s)
+def predict_rows(robot, prep, kinds, v_s: float = 0.0, columns=None) -> np.ndarray:
+    """``[Y | joint columns]`` (K, n, m) on the coarse grid at the prediction states (low-passed at the cut-off)."""
+    return identification_regressor(robot, *prep.predict, kinds, v_s, columns)
 
 
 def _solve(G, b, w) -> np.ndarray:
@@ -204,8 +215,8 @@ def _score(rms) -> float:
 
 
 def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, coulomb_velocities,
-           grids=None, folds: int = FOLDS) -> dict:
-    """Choose cut-off, velocity source, weighting and Coulomb smoothing by cross-validation (module docstring).
+           grids=None, folds: int = FOLDS, armature=(False,), merged=()) -> dict:
+    """Choose cut-off, velocity source, weighting, Coulomb smoothing and armature by cross-validation.
 
     Parameters
     ----------
@@ -221,32 +232,44 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         The log resampled once.
     folds : int
         Contiguous blocks of the training part.
+    armature : sequence of bool
+        Fit a rotor inertia per joint (``True``), or not; with both, stages 1 and 2 fit it and stage 3
+        scores the model without it at the chosen settings (module docstring).
+    merged : sequence of int
+        Joints (0-based) whose armature column is in the rigid regressor's span (not fitted:
+        :func:`~rc3r.identify.regressors.merged_columns`).
 
     Returns
     -------
     dict
-        ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``score``),
-        ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
+        ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``armature``,
+        ``score``), ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
         (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``,
         ``best_score``, ``method`` (one paragraph), ``score`` (its meaning).
     """
     g = _flt.Grids.of(log) if grids is None else grids
     vs = tuple(coulomb_velocities) if "coulomb" in kinds else (0.0,)
     v0 = COULOMB_START if COULOMB_START in vs else vs[len(vs) // 2]
+    arm_opts = tuple(dict.fromkeys(bool(a) for a in armature))
+    arm0 = arm_opts[-1]
+    n = robot.n
     rows = []
     best = None
     cache = {}
 
-    def run(fc, vel, v_s, weights):
+    def run(fc, vel, v_s, weights, arm):
         prep, LY, PY, th, memo = cache[(fc, vel)]
-        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY, memo=memo)[th]
-        P = np.concatenate([PY, friction_columns(prep.predict[1][th], kinds, v_s)], axis=2)
+        ks = tuple(kinds) + (("armature",) if arm else ())
+        cols = kept_columns(ks, n, merged)
+        A = filtered_rows(robot, prep, ks, v_s, arm_rows=LY, memo=memo, columns=cols)[th]
+        qp, qdp, qddp = (X[th] for X in prep.predict)
+        P = np.concatenate([PY, joint_columns(qdp, qddp, ks, v_s)[:, :, cols]], axis=2)
         train = (prep.usable & (prep.t <= t_split))[th]
         res = cv_scores(A, prep.tau[th], P, prep.tau_raw[th], prep.t[th], train, fc, weights, folds)
         out = []
         for w in weights:
             row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
-                   "rms": [float(r) for r in res[w]], "score": _score(res[w])}
+                   "armature": bool(arm), "rms": [float(r) for r in res[w]], "score": _score(res[w])}
             rows.append(row)
             out.append(row)
         return out
@@ -262,29 +285,40 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
             cache = {(fc, vel): (prep, LY, PY, th, {})}
             stage1 = vs if not multi else (v0,)
             for v_s in stage1:
-                for row in run(fc, vel, v_s, weightings):
+                for row in run(fc, vel, v_s, weightings, arm0):
                     if best is None or row["score"] < best[0]["score"]:
                         best = (row, cache[(fc, vel)])
     if best is None or not np.isfinite(best[0]["score"]):
         raise ConfigError(f"log {log.source}: too short to cross-validate the filter ({folds} blocks of the "
                           "training part); give a longer log or --filter, --velocities, --weighting")
+    fc, vel = best[0]["cutoff_hz"], best[0]["velocities"]
+    cache = {(fc, vel): best[1]}
     if multi:
-        fc, vel = best[0]["cutoff_hz"], best[0]["velocities"]
-        cache = {(fc, vel): best[1]}
         for v_s in vs:
             if v_s != v0:
-                for row in run(fc, vel, v_s, weightings):
+                for row in run(fc, vel, v_s, weightings, arm0):
                     if row["score"] < best[0]["score"]:
                         best = (row, best[1])
-    chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "score")}
+    for arm in arm_opts:
+        if arm != arm0:
+            other = min(run(fc, vel, best[0]["coulomb_velocity"], weightings, arm), key=lambda r: r["score"])
+            with_arm, without = (other, best[0]) if arm else (best[0], other)
+            best = (with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without, best[1])
+    chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature",
+                                      "score")}
     lo = min(float(r["score"]) for r in rows)
+    stages = ("stage 1: every cut-off x velocity source x weighting at v_s = "
+              f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source" if multi
+              else "every candidate setting")
+    if len(arm_opts) > 1:
+        stages += (f" (with{'' if arm0 else 'out'} a rotor inertia per joint), then every weighting "
+                   f"with{'out' if arm0 else ''} it at the chosen settings; the rotor inertias are kept only "
+                   f"when they lower the best score by more than {100 * ARMATURE_GAIN:g} %")
     return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
             "stage1_coulomb_velocity": float(v0) if multi else None,
             "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
                        "logged torques predicted (states low-passed at the cut-off) by the parallel-filtered fit "
                        f"on the other blocks, less a guard of {GUARD:g} / f_c s at each side of the block; "
-                       + ("stage 1: every cut-off x velocity source x weighting at v_s = "
-                          f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source"
-                          if multi else "every candidate setting")),
+                       + stages),
             "score": "geometric mean over joints of the per-joint held-out RMS pooled over the blocks [N m]; "
                      "lowest wins"}
