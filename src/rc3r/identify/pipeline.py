@@ -159,11 +159,13 @@ class Identification:
         Pinv = np.zeros((p + m_all, p + m_all))
         Pinv[np.ix_(keep, keep)] = Pinv_c
         merged = {}
+        all_names = friction_names(self.friction_kinds, n)
+        names_c = list(self.coefficient_names) + [all_names[c] for c in cols]
         if self.armature and self.armature.get("merged") and "armature" in self.friction_kinds:
             a0 = self.friction_kinds.index("armature") * n
             for name, rigid in self.armature["merged"].items():
                 j = int(name[2:]) - 1
-                k = list(self.coefficient_names).index(rigid)
+                k = names_c.index(rigid)
                 Pinv[p + a0 + j, p + a0 + j] = Pinv_c[k, k]
                 merged[name] = rigid
         Pinv = 0.5 * (Pinv + Pinv.T)
@@ -339,12 +341,22 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         raise ConfigError(f"no held-out samples: the last {test_fraction:g} of the log lies in the filter's "
                           f"start-up ({_flt.EDGE / fc:.3g} s); give a longer log or a larger --test-fraction")
     arm_note = None
+    partner = {j: robot.coefficient_names[k] for j, k in merged.items()}
     while True:
         kinds_all = kinds + (("armature",) if arm else ())
         cols = kept_columns(kinds_all, robot.n, tuple(merged) if arm else ())
         A = _filtered_rows(robot, prep, kinds_all, v_s, cols)
         all_names = friction_names(kinds_all, robot.n)
         names = tuple(robot.coefficient_names) + tuple(all_names[c] for c in cols)
+        if arm:  # rotor inertias nearly confounded with a rigid coefficient on this log: merged, not fitted
+            ia = [p_ + i for i, c in enumerate(cols) if all_names[c].startswith("ia") for p_ in (robot.p,)]
+            weak = _est.weak_columns(A[train], ia)
+            if weak:
+                partner |= {int(names[k][2:]) - 1: names[w] for k, w in weak.items()}
+                merged = dict(merged) | {int(names[k][2:]) - 1: w for k, w in weak.items()}
+                cols = kept_columns(kinds_all, robot.n, tuple(merged))
+                A = _filtered_rows(robot, prep, kinds_all, v_s, cols)
+                names = tuple(robot.coefficient_names) + tuple(all_names[c] for c in cols)
         try:
             _est.check_excitation(A[train], names, prep.q[train])
             break
@@ -355,11 +367,11 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     arm_info = {"fitted": bool(arm), "option": armature,
                 "chosen": arm_note or ("cross-validation" if len(arm_opts) > 1 and sel is not None else
                                        f"given (--armature {armature})"),
-                "merged": {all_names[kinds_all.index("armature") * robot.n + j] if arm else f"ia{j + 1}":
-                           robot.coefficient_names[k] for j, k in merged.items()},
+                "merged": {f"ia{j + 1}": partner[j] for j in sorted(merged)},
                 "meaning": "a rotor inertia per joint (Pinocchio's armature [kg m^2], column qdd_j in joint j's row); "
                            "merged: joints whose column the rigid regressor already holds (over random states), not "
-                           "fitted: their rotor inertia is part of the named rigid coefficient"}
+                           "fitted: their rotor inertia is part of the named rigid coefficient; or, on this log, nearly confounded with "
+                           "the named coefficient (column-scaled condition number above estimate.ARMATURE_COND)"}
     fit = _est.weighted_least_squares(A[train], prep.tau[train], gain=prep.noise_gain, step=prep.step,
                                       weighting=wgt)
     # the unfiltered residual at the training stamps (evenly thinned): its spectrum sets the covariance
