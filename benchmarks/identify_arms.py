@@ -26,8 +26,10 @@ its held-out RMS per joint (``validation.rms`` of identified.json, the unconstra
 ``physical.validation.rms``, bounds.toml's) beside the **best plain least-squares fit** of rc3r's model
 class, computed here: :func:`rc3r.identify.pipeline.identify` with every setting given (ordinary least
 squares, no cross-validation, no consistent fit) over every cut-off the log's rate allows x velocity source
-(logged, differentiated) x Coulomb law (``sign``, ``tanh(qd / v_s)`` at 0.003 and 0.01 rad/s) x rotor inertia (off, on), the
-best held-out RMS **per joint** over those (a generous baseline: each joint gets its own best setting).
+(logged, differentiated) x Coulomb law (``sign``, ``tanh(qd / v_s)`` at 0.003 and 0.01 rad/s) x rotor inertia
+(off, on): the **best fit** (the setting with the lowest geometric mean of the held-out RMS over the joints)
+and, stricter, each joint's own minimum over all those settings (a minimum over 28-84 noisy held-out
+figures: biased low).
 Then ``rc3r design (--robot | --urdf) --bounds ID/bounds.toml --rate 1000 --n 2 --duration 0.5``: accepted
 (exit 0) or its one-line refusal.
 """
@@ -124,7 +126,8 @@ def make_log(name, spec, seed):
 
 
 def best_plain(robot, log):
-    """Per joint, the lowest held-out RMS of plain OLS over every setting (module docstring), and its setting."""
+    """Plain OLS over every setting (module docstring): the best fit's held-out RMS (n,) (lowest geometric mean
+    over the joints) and its setting, and per joint the lowest over all settings (n,) and theirs."""
     from threadpoolctl import threadpool_limits
 
     from rc3r.identify.filtering import Grids, cutoff_candidates
@@ -133,14 +136,18 @@ def best_plain(robot, log):
     fs = Grids.of(log).fs
     vels = ("logged", "differentiated") if log.qd is not None else ("differentiated",)
     best, how = np.full(robot.n, np.inf), [None] * robot.n
+    one, one_how = None, None
     for fc, vel, v_s, arm in itertools.product(cutoff_candidates(fs), vels, PLAIN_VS, ("off", "on")):
         with threadpool_limits(limits=1, user_api="blas"):
             res = identify(robot, log, cutoff_hz=fc, velocities=vel, weighting="ordinary", coulomb_velocity=v_s,
                            armature=arm, test_fraction=TEST_FRACTION, physical=False, consistency=False)
         rms = np.asarray(res.validation["rms"])
+        label = f"{fc:g} Hz {vel[:4]} v_s={v_s:g} ia={arm}"
         for j in np.nonzero(rms < best)[0]:
-            best[j], how[j] = rms[j], f"{fc:g} Hz {vel[:4]} v_s={v_s:g} ia={arm}"
-    return best, how
+            best[j], how[j] = rms[j], label
+        if one is None or np.exp(np.mean(np.log(rms))) < np.exp(np.mean(np.log(one))):
+            one, one_how = rms, label
+    return one, one_how, best, how
 
 
 def run_cli(args, log_path, out, arm_args):
@@ -170,7 +177,7 @@ def main(argv=None) -> int:
     from rc3r.identify.log import save_log
 
     print(f"seed {args.seed}; test fraction {TEST_FRACTION}; held-out RMS per joint [N m] against the logged torques")
-    worst = 0.0
+    worst = worst_j = 0.0
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.arms.split(","):
             spec = ARMS[name]
@@ -178,7 +185,7 @@ def main(argv=None) -> int:
             path = Path(tmp) / f"{name}.npz"
             save_log(log, path)
             data, wall, verdict = run_cli(args, path, Path(tmp) / name, arm_args)
-            best, how = best_plain(robot, log)
+            one, one_how, best, how = best_plain(robot, log)
             rms = np.asarray(data["validation"]["rms"])
             prms = np.asarray((data.get("physical") or {}).get("validation", {}).get("rms", rms))
             sel = data["filter"]
@@ -190,18 +197,22 @@ def main(argv=None) -> int:
                   f"v_s {data['friction_law']['coulomb_velocity']:g}, rotor inertias "
                   f"{'fitted' if arm.get('fitted') else 'not fitted'}"
                   + (f" (merged: {', '.join(f'{a}->{b}' for a, b in arm['merged'].items())})" if arm.get('merged') else ""))
-            print(f"  {'joint':>5} {'default':>8} {'bounds':>8} {'best OLS':>8} {'ratio':>6}  best setting")
+            print(f"  best plain OLS fit (lowest geometric mean): {one_how}")
+            print(f"  {'joint':>5} {'default':>8} {'bounds':>8} {'best fit':>8} {'ratio':>6} {'joint min':>9} "
+                  f"{'ratio':>6}  setting of the joint's min")
             for j in range(robot.n):
-                r = max(rms[j], prms[j]) / best[j]
-                worst = max(worst, r)
-                print(f"  {j + 1:>5} {rms[j]:>8.4f} {prms[j]:>8.4f} {best[j]:>8.4f} {r:>6.3f}  {how[j]}")
+                r, r_j = max(rms[j], prms[j]) / one[j], max(rms[j], prms[j]) / best[j]
+                worst, worst_j = max(worst, r), max(worst_j, r_j)
+                print(f"  {j + 1:>5} {rms[j]:>8.4f} {prms[j]:>8.4f} {one[j]:>8.4f} {r:>6.3f} {best[j]:>9.4f} "
+                      f"{r_j:>6.3f}  {how[j]}")
             if arm.get("fitted"):
                 print("  rotor inertias [kg m^2]: " + " ".join(f"{x:.3g}" for x in data["physical"]["friction"]
                                                               ["armature"]) + " (true " +
                       " ".join(f"{x:g}" for x in spec["armature"]) + ")")
             print(f"  rc3r design --bounds: {verdict}")
-    print(f"\nworst ratio (default or bounds' estimate over the best plain OLS, any joint): {worst:.3f} "
-          f"({'within' if worst <= 1.15 else 'beyond'} 15 %)")
+    print(f"\nworst ratio, any joint, of the default's or the bounds' estimate's RMS: to the best plain OLS fit "
+          f"{worst:.3f} ({'within' if worst <= 1.15 else 'beyond'} 15 %); to the joint's own minimum over every "
+          f"setting {worst_j:.3f} ({'within' if worst_j <= 1.15 else 'beyond'} 15 %)")
     return 0
 
 

@@ -5,7 +5,7 @@ r"""The identification pipeline: from a log to theta, friction, covariance, vali
 1. the split: the first ``1 - F`` of the log's duration trains, the last ``F`` is held out (the
    filters run over the whole log once; their start-up at both ends is unused);
 2. the settings: cut-off, velocity source (logged or differentiated), weighting (ordinary or
-   per-joint noise) and Coulomb smoothing velocity, each given or chosen by blocked
+   per-joint noise), Coulomb smoothing velocity and rotor inertias (armature), each given or chosen by blocked
    cross-validation on the training part only (:func:`rc3r.identify.selection.select`; the
    scores behind the choice are kept in ``selection``);
 3. resampling and parallel filtering (:func:`~rc3r.identify.filtering.prepare`), the regressor

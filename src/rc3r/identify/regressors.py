@@ -22,6 +22,11 @@ noise-level friction. ``rc3r identify`` chooses ``v_s`` by cross-validation
 (:mod:`rc3r.identify.selection`) and records it (``friction_law`` in identified.json,
 ``coulomb_velocity`` in bounds.toml's ``[identification]``) so that models and plants use the same
 law (:func:`coulomb`).
+
+A geared joint's rotor inertia ``I_a`` (Pinocchio's ``armature``) adds the column ``qdd_j``
+(:data:`JOINT_KINDS`' ``armature``). Where the rigid regressor already holds that column (joint 1 about
+the gravity axis: its rotor inertia and the link's ``ZZ`` are one coefficient) it is merged, not fitted
+(:func:`merged_columns`, :func:`kept_columns`).
 """
 from __future__ import annotations
 

@@ -11,7 +11,10 @@ What is chosen (:func:`select`), among what the log allows:
 * the weighting of the least squares, ordinary or per-joint noise
   (:data:`~rc3r.identify.estimate.WEIGHTINGS`);
 * the Coulomb smoothing velocity ``v_s`` of ``tanh(qd / v_s)`` among :data:`COULOMB_VELOCITIES`
-  (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``).
+  (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``);
+* whether a rotor inertia per joint (armature, the column ``qdd_j``) is fitted: kept only when it lowers
+  the best score by more than :data:`ARMATURE_GAIN` (joints whose column the rigid regressor holds are
+  never fitted: ``merged``).
 
 How a setting is scored. The training part (the log's first ``1 - F``, outside the filters'
 start-up) is cut into :data:`FOLDS` contiguous blocks of equal duration. For every block, the
@@ -22,11 +25,15 @@ fitted ``L[tau]`` would carry the block's own noise), and predicts the block's *
 (unfiltered, resampled) torques at the states low-passed at ``f_c``: the held-out prediction of
 :mod:`rc3r.identify.pipeline`, on training data. The score of a setting is the geometric mean
 over the joints of the per-joint RMS pooled over the blocks [N m] (every joint counts alike,
-whatever its torque scale); the lowest wins.
+whatever its torque scale), reported; the choice follows :data:`RULE` (below).
 
-The search is in two stages, to keep ``rc3r identify`` fast: (1) every cut-off x velocity source x
-weighting at ``v_s =`` :data:`COULOMB_START`; (2) every ``v_s`` x weighting at the chosen cut-off
-and source. The cross-validation's coarse grid is coarser than the final fit's
+The search scores every cut-off x velocity source x ``v_s`` x weighting (with the rotor inertias when
+they are a candidate: the larger model), then every weighting without the rotor inertias at the chosen
+settings. The chosen setting (:data:`RULE`) is the one whose **worst ratio over the joints** of its RMS to
+that joint's best RMS over every setting scored is lowest (ties: the geometric mean): every joint is
+served within the smallest factor of what the model class can do for it, rather than the joints' mean
+(the geometric mean traded one joint's 20 % for others' gains on the stand-in arms of
+docs/identification.md 2.12). The cross-validation's coarse grid is coarser than the final fit's
 (:data:`CV_COARSE_FACTOR`), and its rows are thinned to a rate of at least :data:`CV_RATE_FACTOR`
 ``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
 segments (computed once per setting), so the folds and weightings cost little beyond building the
@@ -77,6 +84,16 @@ GUARD = 1.5
 #: The model with a rotor inertia per joint is chosen only when its score is lower by more than this share
 #: (the simpler model wins ties: on arms without rotor inertia the two score within noise, 1e-3 on the 3R).
 ARMATURE_GAIN = 0.01
+
+#: How the scored settings are ranked: ``"worst-ratio"`` (default): the lowest worst ratio over the joints of a
+#: setting's RMS to that joint's best RMS over every setting scored (ties: the geometric mean); or
+#: ``"geometric-mean"``: the lowest geometric mean over the joints.
+RULE = "worst-ratio"
+
+#: Search cut-off x source at one ``v_s`` first, then ``v_s`` (True: before the stand-in arms of
+#: docs/identification.md 2.12, whose 100 Hz log ranks cut-offs differently at ``v_s`` 0.003 and 0.01), or every
+#: combination (False, the default; the Panda log: 8 s of CPU for the whole identification).
+TWO_STAGE = False
 
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
@@ -254,7 +271,6 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     arm0 = arm_opts[-1]
     n = robot.n
     rows = []
-    best = None
     cache = {}
 
     def run(fc, vel, v_s, weights, arm):
@@ -274,7 +290,19 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
             out.append(row)
         return out
 
-    multi = len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
+    multi = TWO_STAGE and len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
+    caches = {}
+
+    def pick(cands):
+        """The candidate of the rule (:data:`RULE`) among ``cands``, each judged against every row scored."""
+        ok = [r for r in cands if np.isfinite(r["score"])]
+        if not ok:
+            return None
+        if RULE == "geometric-mean":
+            return min(ok, key=lambda r: r["score"])
+        ref = np.min([r["rms"] for r in rows if np.isfinite(r["score"])], axis=0)
+        return min(ok, key=lambda r: (round(float(np.max(np.asarray(r["rms"]) / ref)), 12), r["score"]))
+
     for vel in velocities:
         for fc in cutoffs:
             prep = _flt.prepare(log, fc, vel, grids=g, coarse_factor=CV_COARSE_FACTOR)
@@ -282,43 +310,43 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
             th = slice(None, None, max(1, int(np.floor(prep.fs_coarse / (CV_RATE_FACTOR * fc)))))
             qp, qdp, qddp = (X[th] for X in prep.predict)
             PY = np.asarray(robot.regressor(qp, qdp, qdp, qddp), dtype=float)
-            cache = {(fc, vel): (prep, LY, PY, th, {})}
-            stage1 = vs if not multi else (v0,)
-            for v_s in stage1:
-                for row in run(fc, vel, v_s, weightings, arm0):
-                    if best is None or row["score"] < best[0]["score"]:
-                        best = (row, cache[(fc, vel)])
-    if best is None or not np.isfinite(best[0]["score"]):
+            cache[(fc, vel)] = (prep, LY, PY, th, {})
+            for v_s in (vs if not multi else (v0,)):
+                run(fc, vel, v_s, weightings, arm0)
+    top = pick(rows)
+    if top is None:
         raise ConfigError(f"log {log.source}: too short to cross-validate the filter ({folds} blocks of the "
                           "training part); give a longer log or --filter, --velocities, --weighting")
-    fc, vel = best[0]["cutoff_hz"], best[0]["velocities"]
-    cache = {(fc, vel): best[1]}
+    fc, vel = top["cutoff_hz"], top["velocities"]
+    cache = {(fc, vel): cache[(fc, vel)]}
     if multi:
         for v_s in vs:
             if v_s != v0:
-                for row in run(fc, vel, v_s, weightings, arm0):
-                    if row["score"] < best[0]["score"]:
-                        best = (row, best[1])
+                run(fc, vel, v_s, weightings, arm0)
+        top = pick([r for r in rows if r["cutoff_hz"] == fc and r["velocities"] == vel])
+    best = (top, None)
     for arm in arm_opts:
         if arm != arm0:
-            other = min(run(fc, vel, best[0]["coulomb_velocity"], weightings, arm), key=lambda r: r["score"])
-            with_arm, without = (other, best[0]) if arm else (best[0], other)
-            best = (with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without, best[1])
+            other = min(run(fc, vel, top["coulomb_velocity"], weightings, arm), key=lambda r: r["score"])
+            with_arm, without = (other, top) if arm else (top, other)
+            best = (with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without, None)
     chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature",
                                       "score")}
     lo = min(float(r["score"]) for r in rows)
     stages = ("stage 1: every cut-off x velocity source x weighting at v_s = "
               f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source" if multi
-              else "every candidate setting")
+              else "every candidate setting") + (
+        "; chosen: the lowest worst ratio over the joints of the setting's RMS to the joint's best over every "
+        "setting (ties: geometric mean)" if RULE == "worst-ratio" else "; chosen: the lowest geometric mean")
     if len(arm_opts) > 1:
         stages += (f" (with{'' if arm0 else 'out'} a rotor inertia per joint), then every weighting "
                    f"with{'out' if arm0 else ''} it at the chosen settings; the rotor inertias are kept only "
                    f"when they lower the best score by more than {100 * ARMATURE_GAIN:g} %")
     return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
-            "stage1_coulomb_velocity": float(v0) if multi else None,
+            "stage1_coulomb_velocity": float(v0) if multi else None, "rule": RULE,
             "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
                        "logged torques predicted (states low-passed at the cut-off) by the parallel-filtered fit "
                        f"on the other blocks, less a guard of {GUARD:g} / f_c s at each side of the block; "
                        + stages),
             "score": "geometric mean over joints of the per-joint held-out RMS pooled over the blocks [N m]; "
-                     "lowest wins"}
+                     "the choice follows rule (worst-ratio: per-joint RMS against each joint's best)"}
