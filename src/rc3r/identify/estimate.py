@@ -67,7 +67,7 @@ import numpy as np
 from ..errors import ConfigError, ParameterError
 
 __all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit", "ellipsoid_factor", "draw_theta",
-           "check_excitation", "weak_columns", "ARMATURE_COND", "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
+           "check_excitation", "weak_columns", "ARMATURE_COND", "spread_ellipsoid", "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
            "dominating", "ellipsoid"]
 
 #: Largest condition number of the column-scaled regressor that still counts as full rank.
@@ -406,6 +406,24 @@ def ellipsoid(cov_theta, confidence: float, dof: float | None = None) -> dict:
     return {"P": P, "chi2": q, "quantile": which, "dof": None if dof is None else float(dof),
             "rho": float(np.sqrt(np.linalg.eigvalsh(Pinv)[-1])), "rho_i": np.sqrt(np.diag(Pinv)),
             "confidence": float(confidence)}
+
+
+def spread_ellipsoid(P, keep, size: int, pairs: dict) -> dict:
+    """An ellipsoid ``P`` (k, k) over coordinates ``keep`` (k,) of ``size``, spread over all of them.
+
+    A coordinate not kept gets an independent half-width: that of the kept coordinate ``pairs[i]`` names
+    (an index into ``keep``), for each ``i`` in ``pairs`` (the slice through the result at 0 along them is
+    ``P``). Returns ``P`` (size, size), ``rho``, ``rho_i`` (size,). Every coordinate must be kept or paired.
+    """
+    Pinv_c = np.linalg.inv(np.asarray(P, dtype=float))
+    Pinv = np.zeros((size, size))
+    Pinv[np.ix_(keep, keep)] = Pinv_c
+    for i, k in pairs.items():
+        Pinv[i, i] = Pinv_c[k, k]
+    Pinv = 0.5 * (Pinv + Pinv.T)
+    P_full = np.linalg.inv(Pinv)
+    return {"P": 0.5 * (P_full + P_full.T), "rho": float(np.sqrt(np.linalg.eigvalsh(Pinv)[-1])),
+            "rho_i": np.sqrt(np.diag(Pinv))}
 
 
 def ellipsoid_factor(P) -> np.ndarray:

@@ -152,31 +152,18 @@ class Identification:
         """
         p, n = self.p, self.sigma.size
         ell = _est.ellipsoid(self.cov, self.confidence, dof=self.dof)
-        cols = self.joint_columns
-        m_all = n * len(self.friction_kinds)
-        keep = np.concatenate([np.arange(p), p + cols])
-        Pinv_c = np.linalg.inv(ell["P"])
-        Pinv = np.zeros((p + m_all, p + m_all))
-        Pinv[np.ix_(keep, keep)] = Pinv_c
-        merged = {}
         all_names = friction_names(self.friction_kinds, n)
-        names_c = list(self.coefficient_names) + [all_names[c] for c in cols]
-        if self.armature and self.armature.get("merged") and "armature" in self.friction_kinds:
-            a0 = self.friction_kinds.index("armature") * n
-            for name, rigid in self.armature["merged"].items():
-                j = int(name[2:]) - 1
-                k = names_c.index(rigid)
-                Pinv[p + a0 + j, p + a0 + j] = Pinv_c[k, k]
-                merged[name] = rigid
-        Pinv = 0.5 * (Pinv + Pinv.T)
-        P = np.linalg.inv(Pinv)
+        names_c = list(self.coefficient_names) + [all_names[c] for c in self.joint_columns]
+        merged = dict((self.armature or {}).get("merged") or {}) if "armature" in self.friction_kinds else {}
+        a0 = p + self.friction_kinds.index("armature") * n if merged else 0
+        pairs = {a0 + int(name[2:]) - 1: names_c.index(rigid) for name, rigid in merged.items()}
+        full = _est.spread_ellipsoid(ell["P"], np.concatenate([np.arange(p), p + self.joint_columns]),
+                                     p + n * len(self.friction_kinds), pairs)
         x = np.asarray(x, dtype=float)
-        theta0 = np.concatenate([x[:p], self._full(x[p:])])
         return {"kinds": list(self.friction_kinds), "coulomb_velocity": float(self.friction_law.get("coulomb_velocity", 0.0)),
-                "rigid_p": int(p), "coefficient_names": list(self.coefficient_names) + list(friction_names(
-                    self.friction_kinds, n)), "theta0": theta0, "P": 0.5 * (P + P.T),
-                "rho": float(np.sqrt(np.linalg.eigvalsh(Pinv)[-1])), "rho_i": np.sqrt(np.diag(Pinv)),
-                "quantile": float(ell["chi2"]), "merged": merged}
+                "rigid_p": int(p), "coefficient_names": list(self.coefficient_names) + list(all_names),
+                "theta0": np.concatenate([x[:p], self._full(x[p:])]), **full, "quantile": float(ell["chi2"]),
+                "merged": merged}
 
     def to_dict(self) -> dict:
         """JSON-ready: every field of ``identified.json`` except provenance."""
