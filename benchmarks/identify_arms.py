@@ -196,7 +196,8 @@ def main(argv=None) -> int:
                   f"identify {wall:.0f} s: {sel['cutoff_hz']:g} Hz, {sel['velocities']}, {sel['weighting']}, "
                   f"v_s {data['friction_law']['coulomb_velocity']:g}, rotor inertias "
                   f"{'fitted' if arm.get('fitted') else 'not fitted'}"
-                  + (f" (merged: {', '.join(f'{a}->{b}' for a, b in arm['merged'].items())})" if arm.get('merged') else ""))
+                  + (" (merged: " + ", ".join(f"{a}->{b}" for a, b in arm["merged"].items()) + ")"
+                     if arm.get("merged") else ""))
             print(f"  best plain OLS fit (lowest geometric mean): {one_how}")
             print(f"  {'joint':>5} {'default':>8} {'bounds':>8} {'best fit':>8} {'ratio':>6} {'joint min':>9} "
                   f"{'ratio':>6}  setting of the joint's min")

@@ -169,8 +169,8 @@ def cmd_identify(args) -> int:
     nfr = sum(k != "armature" for k in res.friction_kinds) * robot.n
     arm = res.armature or {}
     n_arm = res.joint_columns.size - nfr
-    arm_text = (f" + {n_arm} rotor inertias" + (f" ({', '.join(f'{a} merged with {b}' for a, b in arm['merged'].items())})"
-                                                 if arm.get("merged") else "")) if arm.get("fitted") else ""
+    merged = ", ".join(f"{a} merged with {b}" for a, b in (arm.get("merged") or {}).items())
+    arm_text = (f" + {n_arm} rotor inertias" + (f" ({merged})" if merged else "")) if arm.get("fitted") else ""
     print(f"identified {robot.p} coefficients + {nfr} friction terms{arm_text} of "
           f"{robot.robot_name or robot.name} from {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s")
     sel = res.selection

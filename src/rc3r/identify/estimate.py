@@ -67,7 +67,8 @@ import numpy as np
 from ..errors import ConfigError, ParameterError
 
 __all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit", "ellipsoid_factor", "draw_theta",
-           "check_excitation", "weak_columns", "ARMATURE_COND", "spread_ellipsoid", "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
+           "check_excitation", "weak_columns", "ARMATURE_COND", "spread_ellipsoid",
+           "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
            "dominating", "ellipsoid"]
 
 #: Largest condition number of the column-scaled regressor that still counts as full rank.

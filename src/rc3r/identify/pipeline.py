@@ -160,7 +160,8 @@ class Identification:
         full = _est.spread_ellipsoid(ell["P"], np.concatenate([np.arange(p), p + self.joint_columns]),
                                      p + n * len(self.friction_kinds), pairs)
         x = np.asarray(x, dtype=float)
-        return {"kinds": list(self.friction_kinds), "coulomb_velocity": float(self.friction_law.get("coulomb_velocity", 0.0)),
+        return {"kinds": list(self.friction_kinds),
+                "coulomb_velocity": float(self.friction_law.get("coulomb_velocity", 0.0)),
                 "rigid_p": int(p), "coefficient_names": list(self.coefficient_names) + list(all_names),
                 "theta0": np.concatenate([x[:p], self._full(x[p:])]), **full, "quantile": float(ell["chi2"]),
                 "merged": merged}
@@ -336,7 +337,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         all_names = friction_names(kinds_all, robot.n)
         names = tuple(robot.coefficient_names) + tuple(all_names[c] for c in cols)
         if arm:  # rotor inertias nearly confounded with a rigid coefficient on this log: merged, not fitted
-            ia = [p_ + i for i, c in enumerate(cols) if all_names[c].startswith("ia") for p_ in (robot.p,)]
+            ia = [robot.p + i for i, c in enumerate(cols) if all_names[c].startswith("ia")]
             weak = _est.weak_columns(A[train], ia)
             if weak:
                 partner |= {int(names[k][2:]) - 1: names[w] for k, w in weak.items()}
@@ -357,8 +358,9 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
                 "merged": {f"ia{j + 1}": partner[j] for j in sorted(merged)},
                 "meaning": "a rotor inertia per joint (Pinocchio's armature [kg m^2], column qdd_j in joint j's row); "
                            "merged: joints whose column the rigid regressor already holds (over random states), not "
-                           "fitted: their rotor inertia is part of the named rigid coefficient; or, on this log, nearly confounded with "
-                           "the named coefficient (column-scaled condition number above estimate.ARMATURE_COND)"}
+                           "fitted: their rotor inertia is part of the named rigid coefficient; or, on this log, "
+                           "nearly confounded with the named coefficient (column-scaled condition number above "
+                           "estimate.ARMATURE_COND)"}
     fit = _est.weighted_least_squares(A[train], prep.tau[train], gain=prep.noise_gain, step=prep.step,
                                       weighting=wgt)
     # the unfiltered residual at the training stamps (evenly thinned): its spectrum sets the covariance
@@ -367,7 +369,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     tr_idx = np.nonzero(ok & (log.t <= t_split))[0]
     tr_idx = tr_idx[np.unique(np.linspace(0, tr_idx.size - 1, min(tr_idx.size, MAX_RAW_STAMPS)).astype(int))]
     raw_res = log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds_all, v_s=v_s, columns=cols) @ fit.x
-    sigma_raw = np.sqrt(np.mean((log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds_all, True, v_s, cols) @ fit.x)
+    sigma_raw = np.sqrt(np.mean((log.tau[tr_idx]
+                                 - _raw_rows(robot, prep, log.t[tr_idx], kinds_all, True, v_s, cols) @ fit.x)
                                 ** 2, axis=0))
     density = _flt.residual_density(log.t[tr_idx], raw_res, fc, prep.fs)
     parts = {"white": fit.cov, "spectral": _est.spectral_covariance(A[train], fit.weights, prep.fs_coarse, density)}
@@ -496,7 +499,8 @@ def _physical(robot, fit, metric, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te,
     out = {
         "theta": pf.theta.tolist(), "theta_std": se[:p].tolist(),
         "friction": {k: spread(pf.x[p:], 0.0)[i * n:(i + 1) * n].tolist() for i, k in enumerate(kinds)},
-        "friction_std": {k: [None if not np.isfinite(v) else float(v) for v in spread(se[p:], np.nan)[i * n:(i + 1) * n]]
+        "friction_std": {k: [None if not np.isfinite(v) else float(v)
+                             for v in spread(se[p:], np.nan)[i * n:(i + 1) * n]]
                          for i, k in enumerate(kinds)},
         "links": links, "log_cholesky": pf.eta.tolist(),
         "masses": pf.masses.tolist(), "urdf_masses": pi0[0::10].tolist(),

@@ -33,7 +33,8 @@ chosen cut-off and source; both with the rotor inertias when they are a candidat
 then (3) every weighting without them at the chosen settings. The lowest geometric mean wins
 (:data:`RULE`). The alternatives kept as settings, every combination at once and the lowest worst ratio
 over the joints of a setting's RMS to that joint's best, were measured worse on the stand-in arms of
-docs/identification.md 2.12 (the geared UR5's joint 2: 1.17 x the best plain fit, against 1.03). The cross-validation's coarse grid is coarser than the final fit's
+docs/identification.md 2.12 (the geared UR5's joint 2: 1.17 x the best plain fit, against 1.03).
+The cross-validation's coarse grid is coarser than the final fit's
 (:data:`CV_COARSE_FACTOR`), and its rows are thinned to a rate of at least :data:`CV_RATE_FACTOR`
 ``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
 segments (computed once per setting), so the folds and weightings cost little beyond building the
@@ -289,7 +290,6 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         return out
 
     multi = TWO_STAGE and len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
-    caches = {}
 
     def pick(cands):
         """The candidate of the rule (:data:`RULE`) among ``cands``, each judged against every row scored."""
