@@ -231,9 +231,19 @@ def cmd_identify(args) -> int:
                                           f"deviations away ({'inside' if c['within_ellipsoid'] else 'outside'} "
                                           "the ellipsoid)"))
     which = "physically consistent" if "physical" in bounds else "unconstrained"
-    print(f"bounds of the {which} estimate at {100 * bounds['confidence']:g} %: rho = {bounds['rho']:.4g}, "
-          f"max rho_i = {max(bounds['rho_i']):.4g} -> {out}/bounds.toml, identified.json, torque.png, "
-          "residuals.png")
+    import numpy as np
+
+    act = bounds.get("actuator")
+    if act is not None and act["kinds"]:  # rc3r-bounds/2: what a reader of the rigid coefficients gets
+        rp = act["rigid_p"]
+        Pinv = np.linalg.inv(act["P"])[:rp, :rp]
+        rho, rho_i = float(np.sqrt(np.linalg.eigvalsh(0.5 * (Pinv + Pinv.T))[-1])), act["rho_i"][:rp]
+        where = (f" over the {rp} rigid coefficients (projected from the ellipsoid over them and the "
+                 f"{len(act['theta0']) - rp} joint coefficients: rho = {act['rho']:.4g})")
+    else:
+        rho, rho_i, where = bounds["rho"], bounds["rho_i"], ""
+    print(f"bounds of the {which} estimate at {100 * bounds['confidence']:g} %{where}: rho = {rho:.4g}, "
+          f"max rho_i = {max(rho_i):.4g} -> {out}/bounds.toml, identified.json, torque.png, residuals.png")
     return EXIT["ok"]
 
 
