@@ -349,12 +349,12 @@ def joint_prior(robot, kinds, columns, c_hat, c_std):
     model = robot.model
     n = robot.n
     kinds = tuple(kinds)
-    attr = {"viscous": "damping", "coulomb": "friction", "armature": "armature"}
+    urdf = {"viscous": model.damping, "coulomb": model.friction, "armature": model.armature}  # Pinocchio 3+
     c0 = np.full(len(columns), np.nan)
     for i, c in enumerate(np.asarray(columns, dtype=int)):
         kind, j = kinds[c // n], c % n
-        if kind in attr:
-            vals = np.asarray(getattr(model, attr[kind], np.zeros(n)), dtype=float).ravel()
+        if kind in urdf:
+            vals = np.asarray(urdf[kind], dtype=float).ravel()
             c0[i] = float(vals[j]) if vals.size == n else 0.0
     width = np.maximum.reduce([np.abs(np.nan_to_num(c0)), np.abs(np.asarray(c_hat, float)),
                                JOINT_PRIOR_WIDTH * np.asarray(c_std, float)])
