@@ -188,7 +188,11 @@ def test_cli_writes_identified_json_and_bounds_toml(tmp_path, result, capsys):
     assert b["robot"] == "rr3" and (b["n"], b["p"]) == (3, 15)
     np.testing.assert_array_equal(b["theta0"], np.asarray(data["physical"]["theta"]))
     np.testing.assert_array_equal(b["physical"]["log_cholesky"], np.asarray(data["physical"]["log_cholesky"]))
-    assert b["rho"] == data["physical"]["ellipsoid"]["rho"] and b["confidence"] == 0.95
+    # rc3r-bounds/2: the rigid bounds are the projection of the ellipsoid over theta and friction (a quantile over
+    # all 24 unknowns): they contain the 15-dimensional ellipsoid at the same confidence
+    assert b["format"] == "rc3r-bounds/2" and b["actuator"]["rigid_p"] == 15 and b["confidence"] == 0.95
+    assert b["rho"] >= data["physical"]["ellipsoid"]["rho"]
+    np.testing.assert_array_equal(b["actuator"]["theta0"][:15], b["theta0"])
     for name in ("torque.png", "residuals.png"):
         assert (out / name).stat().st_size > 10_000
     before = (out / "bounds.toml").read_bytes()
@@ -266,7 +270,7 @@ def test_load_bounds_refuses_inconsistent_files(tmp_path, result):
     res, _, _ = result
     arm = rc3r.load_robot("rr3")
     path = tmp_path / "b.toml"
-    write_bounds(path, res.bounds(), arm, robot_name="rr3")
+    write_bounds(path, dict(res.bounds(), actuator=None), arm, robot_name="rr3")  # rc3r-bounds/1
     good = load_bounds(path, robot=arm)
     np.testing.assert_array_equal(good["P"], res.ellipsoid["P"])  # repr floats round-trip exactly
     text = path.read_text()

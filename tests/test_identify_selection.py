@@ -132,10 +132,11 @@ def test_cross_validation_prefers_differentiated_velocities_when_the_logged_ones
 
 
 def test_given_settings_skip_the_search(arm, motion):
-    """With cut-off, velocities, weighting and v_s all given, no cross-validation runs and they are used."""
+    """With cut-off, velocities, weighting, v_s and the rotor inertias all given, no cross-validation runs and
+    they are used."""
     log, _ = sample_log(motion, seed=0)
     res = identify(arm, log, cutoff_hz=3.0, velocities="differentiated", weighting="ordinary",
-                   coulomb_velocity=0.0, consistency=False)
+                   coulomb_velocity=0.0, consistency=False, armature="off")
     assert res.selection is None
     assert (res.filter["cutoff_hz"], res.filter["velocities"], res.filter["weighting"]) == (3.0, "differentiated",
                                                                                           "ordinary")

@@ -73,6 +73,10 @@ def add_parsers(sub, positive, lock, urdf=str) -> None:
     i.add_argument("--coulomb-velocity", type=positive(float, allow_zero=True), metavar="RAD_S",
                    help="smoothing velocity v_s of the Coulomb law f_c tanh(qd / v_s), 0 for sign(qd) "
                         "(default: chosen by cross-validation among 0, 0.003, 0.01, 0.03, 0.1)")
+    i.add_argument("--armature", choices=("auto", "on", "off"), default="auto",
+                   help="a rotor inertia per joint (Pinocchio's armature, column qdd_j): auto (default: chosen by "
+                        "cross-validation), on or off; a joint whose column the rigid model already holds (joint 1 "
+                        "about the gravity axis) is merged into that coefficient, said in identified.json")
     i.add_argument("--no-consistency", action="store_true",
                    help="skip the consistency SDP of the unconstrained estimate (cvxpy)")
     i.add_argument("--no-physical", action="store_true",
@@ -139,7 +143,7 @@ def cmd_identify(args) -> int:
                        confidence=args.confidence, velocities=args.velocities,
                        consistency=not args.no_consistency, covariance=args.covariance, seed=args.seed,
                        weighting=args.weighting, coulomb_velocity=args.coulomb_velocity,
-                       physical=not args.no_physical)
+                       physical=not args.no_physical, armature=args.armature)
     prov = provenance(seed=args.seed)
     data = res.to_dict() | {"provenance": prov}
     lock = dict(args.lock) if args.lock else {}
@@ -148,6 +152,7 @@ def cmd_identify(args) -> int:
              "filter_chosen": res.filter["chosen"], "sigma": res.sigma.tolist(), "friction": list(res.friction_kinds),
              "covariance": args.covariance, "quantile": bounds["quantile"],
              "velocities": res.filter["velocities"], "weighting": res.filter["weighting"],
+             "armature": bool((res.armature or {}).get("fitted")),
              "coulomb_law": res.friction_law["coulomb"], "coulomb_velocity": res.friction_law["coulomb_velocity"],
              "estimate": "physically consistent (log-Cholesky, log-det prior)" if "physical" in bounds else
              "unconstrained least squares (--no-physical)"}
@@ -161,7 +166,12 @@ def cmd_identify(args) -> int:
         atomic_savefig(torque_figure(res), tmp / "torque.png", dpi=110)
         atomic_savefig(residual_figure(res), tmp / "residuals.png", dpi=110)
     v, f = res.validation, res.filter
-    print(f"identified {robot.p} coefficients + {len(res.friction_kinds) * robot.n} friction terms of "
+    nfr = sum(k != "armature" for k in res.friction_kinds) * robot.n
+    arm = res.armature or {}
+    n_arm = res.joint_columns.size - nfr
+    merged = ", ".join(f"{a} merged with {b}" for a, b in (arm.get("merged") or {}).items())
+    arm_text = (f" + {n_arm} rotor inertias" + (f" ({merged})" if merged else "")) if arm.get("fitted") else ""
+    print(f"identified {robot.p} coefficients + {nfr} friction terms{arm_text} of "
           f"{robot.robot_name or robot.name} from {log.samples} samples over {log.t[-1] - log.t[0]:.4g} s")
     sel = res.selection
     if sel is not None:
@@ -176,12 +186,20 @@ def cmd_identify(args) -> int:
             cell = [min((r["score"] for r in first if r["velocities"] == vel and r["cutoff_hz"] == fc), default=None)
                     for fc in cuts]
             print(f"  {vel:>16}" + "".join(f"{x:>8.4f}" if x is not None else f"{'-':>8}" for x in cell))
+        a0 = rows[0].get("armature", False)
         for w in dict.fromkeys(r["weighting"] for r in rows):
             alt = [r for r in rows if r["cutoff_hz"] == c["cutoff_hz"] and r["velocities"] == c["velocities"]
-                   and r["weighting"] == w]
+                   and r["weighting"] == w and r.get("armature", False) == a0]
             print(f"  {w:>9} at {c['cutoff_hz']:g} Hz, {c['velocities']}, by v_s [rad/s]: "
                   + ", ".join(f"{r['coulomb_velocity']:g} {r['score']:.4f}" for r in sorted(
                       alt, key=lambda r: r["coulomb_velocity"])))
+        arms = {r["armature"]: min(x["score"] for x in rows if x.get("armature") == r["armature"] and
+                                   x["cutoff_hz"] == c["cutoff_hz"] and x["velocities"] == c["velocities"] and
+                                   x["coulomb_velocity"] == c["coulomb_velocity"])
+                for r in rows if "armature" in r}
+        if len(arms) > 1:
+            print(f"  rotor inertia per joint at the chosen settings: with {arms[True]:.4f}, without {arms[False]:.4f} "
+                  f"-> {'with' if c['armature'] else 'without'}")
     law = res.friction_law
     print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}, weighting "
           f"{f['weighting']}, Coulomb tanh(qd / {law['coulomb_velocity']:g} rad/s); "
@@ -213,9 +231,19 @@ def cmd_identify(args) -> int:
                                           f"deviations away ({'inside' if c['within_ellipsoid'] else 'outside'} "
                                           "the ellipsoid)"))
     which = "physically consistent" if "physical" in bounds else "unconstrained"
-    print(f"bounds of the {which} estimate at {100 * bounds['confidence']:g} %: rho = {bounds['rho']:.4g}, "
-          f"max rho_i = {max(bounds['rho_i']):.4g} -> {out}/bounds.toml, identified.json, torque.png, "
-          "residuals.png")
+    import numpy as np
+
+    act = bounds.get("actuator")
+    if act is not None and act["kinds"]:  # rc3r-bounds/2: what a reader of the rigid coefficients gets
+        rp = act["rigid_p"]
+        Pinv = np.linalg.inv(act["P"])[:rp, :rp]
+        rho, rho_i = float(np.sqrt(np.linalg.eigvalsh(0.5 * (Pinv + Pinv.T))[-1])), act["rho_i"][:rp]
+        where = (f" over the {rp} rigid coefficients (projected from the ellipsoid over them and the "
+                 f"{len(act['theta0']) - rp} joint coefficients: rho = {act['rho']:.4g})")
+    else:
+        rho, rho_i, where = bounds["rho"], bounds["rho_i"], ""
+    print(f"bounds of the {which} estimate at {100 * bounds['confidence']:g} %{where}: rho = {rho:.4g}, "
+          f"max rho_i = {max(rho_i):.4g} -> {out}/bounds.toml, identified.json, torque.png, residuals.png")
     return EXIT["ok"]
 
 

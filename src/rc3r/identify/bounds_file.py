@@ -3,12 +3,13 @@ r"""``bounds.toml``: the identified bounds a robust controller is designed from.
 Written by ``rc3r identify`` (:func:`write_bounds`), read by :func:`load_bounds`. Keys:
 
 =====================  ===============================================================
-``format``             ``"rc3r-bounds/1"``
+``format``             ``"rc3r-bounds/2"`` (written), or ``"rc3r-bounds/1"`` (still read)
 ``robot``              registry name of the arm (``"ur5"``, ``"rr3"``), or absent
 ``urdf``               the URDF it was identified with, or absent (one of the two is given)
 ``lock``               joints locked in that URDF (table name -> value), optional
-``n``, ``p``           joints and coefficients
-``coefficient_names``  the p coefficients, in order (the robot's ``coefficient_names``)
+``n``, ``p``           joints and coefficients (/2: the rigid ones and the joint ones)
+``coefficient_names``  the p coefficients, in order (the robot's ``coefficient_names``; /2: then
+                       :func:`~rc3r.identify.regressors.friction_names` of ``[actuator].kinds``)
 ``confidence``         level C of the ellipsoid
 ``quantile``           the quantile q it used (``chi2_p(C)`` or ``p F_{p,nu}(C)``)
 ``seed``               the seed of the identification
@@ -16,6 +17,10 @@ Written by ``rc3r identify`` (:func:`write_bounds`), read by :func:`load_bounds`
 ``P``                  (p, p) the ellipsoid ``(theta - theta0)^T P (theta - theta0) <= 1``
 ``rho``                radius of the smallest ball about theta0 containing it (eq. 6's bound)
 ``rho_i``              (p,) half-widths of the smallest box containing it (eq. 7's bounds)
+``[actuator]``         /2 only: ``kinds`` (joint-column kinds, :data:`~rc3r.identify.regressors.JOINT_KINDS`
+                       order), ``coulomb_velocity`` (``v_s`` [rad/s] of ``tanh(qd / v_s)``),
+                       ``rigid_p`` (the robot's p: the first ``rigid_p`` coefficients are rigid),
+                       ``merged`` (optional: armature names -> the rigid coefficient holding them)
 ``[physical]``         optional: the link parameters of the centre (the physically consistent
                        estimate, :mod:`rc3r.identify.physical`): ``standard_parameters`` (10 nb,),
                        ``log_cholesky`` (10 nb,) and ``log_cholesky_cov`` (10 nb, 10 nb), the
@@ -24,6 +29,12 @@ Written by ``rc3r identify`` (:func:`write_bounds`), read by :func:`load_bounds`
 ``[identification]``   log, digest, filter, noise (for the record)
 ``[provenance]``       versions, git commit, command line, time
 =====================  ===============================================================
+
+In a /2 file ``theta0``, ``P``, ``rho``, ``rho_i`` are over all ``p`` coefficients, rigid and joint
+(:meth:`rc3r.identify.pipeline.Identification.actuator_bounds`). :func:`load_bounds` returns, as for a /1
+file, the rigid coefficients' bounds (the projection of the ellipsoid onto them: ``P_r = ((P^-1)_rr)^-1``,
+its ball and box), so callers that know only the rigid model read either format unchanged, and the whole
+ellipsoid under ``"actuator"``.
 
 Every refusal of :func:`load_bounds` is one :class:`~rc3r.errors.ConfigError` (a missing or
 malformed file, a missing or mistyped key, wrong lengths) or
@@ -41,9 +52,11 @@ import numpy as np
 
 from ..errors import ConfigError, ParameterError
 
-__all__ = ["FORMAT", "write_bounds", "load_bounds", "to_toml"]
+__all__ = ["FORMAT", "FORMAT_V1", "write_bounds", "load_bounds", "to_toml"]
 
-FORMAT = "rc3r-bounds/1"
+#: The format written (joint coefficients included); :data:`FORMAT_V1` (rigid only) is still read.
+FORMAT = "rc3r-bounds/2"
+FORMAT_V1 = "rc3r-bounds/1"
 
 #: Relative slack of the containment checks (ball and box around the ellipsoid).
 CONTAIN_RTOL = 1e-9
@@ -91,14 +104,27 @@ def to_toml(data: dict, header: str = "") -> str:
 def write_bounds(path, bounds: dict, robot, *, robot_name: str | None = None, urdf: str | None = None,
                  lock: dict | None = None, seed: int = 0, identification: dict | None = None,
                  provenance: dict | None = None) -> Path:
-    """Write ``bounds`` (``theta0, P, rho, rho_i, confidence, chi2``) of ``robot`` to ``path`` atomically."""
+    """Write ``bounds`` (``theta0, P, rho, rho_i, confidence, chi2``) of ``robot`` to ``path`` atomically.
+
+    With ``bounds["actuator"]`` (:meth:`~rc3r.identify.pipeline.Identification.actuator_bounds`: joint
+    columns identified) the file is ``rc3r-bounds/2`` over rigid and joint coefficients, else /1.
+    """
     from ..io import atomic_write_text
 
-    data = {"format": FORMAT, "robot": robot_name, "urdf": None if urdf is None else str(urdf),
-            "n": int(robot.n), "p": int(robot.p), "coefficient_names": list(robot.coefficient_names),
-            "confidence": float(bounds["confidence"]), "quantile": float(bounds["chi2"]), "seed": int(seed),
-            "theta0": np.asarray(bounds["theta0"], float), "rho": float(bounds["rho"]),
-            "rho_i": np.asarray(bounds["rho_i"], float), "P": np.asarray(bounds["P"], float)}
+    act = bounds.get("actuator")
+    if act is not None and not act.get("kinds"):
+        act = None
+    src = bounds if act is None else act
+    names = list(robot.coefficient_names) if act is None else list(act["coefficient_names"])
+    data = {"format": FORMAT_V1 if act is None else FORMAT, "robot": robot_name,
+            "urdf": None if urdf is None else str(urdf), "n": int(robot.n), "p": len(names),
+            "coefficient_names": names, "confidence": float(bounds["confidence"]),
+            "quantile": float(src["quantile"] if act is not None else bounds["chi2"]), "seed": int(seed),
+            "theta0": np.asarray(src["theta0"], float), "rho": float(src["rho"]),
+            "rho_i": np.asarray(src["rho_i"], float), "P": np.asarray(src["P"], float)}
+    if act is not None:
+        data["actuator"] = {"kinds": list(act["kinds"]), "coulomb_velocity": float(act["coulomb_velocity"]),
+                            "rigid_p": int(act["rigid_p"]), "merged": dict(act.get("merged") or {}) or None}
     if lock:
         data["lock"] = {str(k): float(v) for k, v in lock.items()}
     if bounds.get("physical") is not None:
@@ -155,6 +181,38 @@ def _physical(path, table, robot):
     return out
 
 
+def _actuator(path, table, n: int, names) -> dict:
+    """The validated ``[actuator]`` table of a /2 file: ``kinds``, ``coulomb_velocity``, ``rigid_p``, ``merged``."""
+    from .regressors import JOINT_KINDS, friction_names
+
+    if not isinstance(table, dict):
+        raise ConfigError(f"bounds file {path}: format {FORMAT!r} needs an [actuator] table")
+    unknown = sorted(set(table) - {"kinds", "coulomb_velocity", "rigid_p", "merged"})
+    if unknown:
+        raise ConfigError(f"bounds file {path}: unknown key(s) in [actuator]: {', '.join(unknown)}")
+    kinds = table.get("kinds")
+    if not (isinstance(kinds, list) and kinds and all(isinstance(k, str) for k in kinds)):
+        raise ConfigError(f"bounds file {path}: [actuator] kinds must be a non-empty list of strings")
+    bad = [k for k in kinds if k not in JOINT_KINDS]
+    if bad or len(set(kinds)) != len(kinds) or list(kinds) != [k for k in JOINT_KINDS if k in kinds]:
+        raise ConfigError(f"bounds file {path}: [actuator] kinds {kinds} must be distinct, in the order "
+                          f"{', '.join(JOINT_KINDS)}")
+    v_s = table.get("coulomb_velocity", 0.0)
+    if isinstance(v_s, bool) or not isinstance(v_s, (int, float)) or not (math.isfinite(v_s) and v_s >= 0):
+        raise ConfigError(f"bounds file {path}: [actuator] coulomb_velocity must be a number >= 0, got {v_s!r}")
+    rp = table.get("rigid_p")
+    if isinstance(rp, bool) or not isinstance(rp, int) or rp <= 0:
+        raise ConfigError(f"bounds file {path}: [actuator] rigid_p must be a positive integer, got {rp!r}")
+    want = tuple(friction_names(kinds, n))
+    if rp + len(want) != len(names) or tuple(names[rp:]) != want:
+        raise ConfigError(f"bounds file {path}: coefficient_names must be the {rp} rigid coefficients then "
+                          f"{', '.join(want)} ([actuator] kinds), got {len(names)} names")
+    merged = table.get("merged", {})
+    if not isinstance(merged, dict) or not all(isinstance(v, str) for v in merged.values()):
+        raise ConfigError(f"bounds file {path}: [actuator] merged must be a table of name = \"coefficient\"")
+    return {"kinds": list(kinds), "coulomb_velocity": float(v_s), "rigid_p": rp, "merged": dict(merged)}
+
+
 def load_bounds(path, robot=None) -> dict:
     """Read and validate a ``bounds.toml`` (module docstring); optionally check it fits ``robot``.
 
@@ -165,15 +223,21 @@ def load_bounds(path, robot=None) -> dict:
         ``n``, ``p``, ``robot`` (str or None), ``urdf`` (str or None), ``lock`` (dict),
         ``coefficient_names`` (tuple), ``confidence``, ``quantile``, ``seed``, ``format``,
         ``source`` (the path), ``identification``, ``provenance`` (dicts, possibly empty),
-        ``physical`` (the validated ``[physical]`` table, or None).
+        ``physical`` (the validated ``[physical]`` table, or None). For a /2 file these are the rigid
+        coefficients' (``p`` the robot's; ``theta0``, ``P``, ``rho``, ``rho_i`` the projection of the
+        ellipsoid onto them) and ``actuator`` is ``{"kinds", "coulomb_velocity", "rigid_p",
+        "coefficient_names" (all), "theta0" (p + m,), "P" (p + m, p + m), "rho", "rho_i" (p + m,),
+        "merged" (dict)}``; for a /1 file ``actuator`` is None.
     """
     from ..io import read_toml
 
     data = read_toml(path, "bounds file")
-    if data.get("format") != FORMAT:
-        raise ConfigError(f"bounds file {path}: format must be {FORMAT!r}, got {data.get('format')!r}")
+    fmt = data.get("format")
+    if fmt not in (FORMAT, FORMAT_V1):
+        raise ConfigError(f"bounds file {path}: format must be {FORMAT!r} or {FORMAT_V1!r}, got {fmt!r}")
     known = {"format", "robot", "urdf", "lock", "n", "p", "coefficient_names", "confidence", "quantile", "seed",
-             "theta0", "rho", "rho_i", "P", "identification", "provenance", "physical"}
+             "theta0", "rho", "rho_i", "P", "identification", "provenance", "physical"} | (
+        {"actuator"} if fmt == FORMAT else set())
     unknown = sorted(set(data) - known)
     if unknown:
         raise ConfigError(f"bounds file {path}: unknown key(s) {', '.join(unknown)}")
@@ -218,6 +282,15 @@ def load_bounds(path, robot=None) -> dict:
     short = np.nonzero(rho_i < np.sqrt(np.diag(Pinv)) * (1 - CONTAIN_RTOL))[0]
     if short.size:
         raise ParameterError(f"bounds file {path}: rho_i of {names[short[0]]} does not contain the ellipsoid P")
+    act = _actuator(path, data.get("actuator"), n, names) if fmt == FORMAT else None
+    if act is not None:
+        rp = act["rigid_p"]
+        act |= {"coefficient_names": list(names), "theta0": theta0, "P": P, "rho": float(rho), "rho_i": rho_i}
+        Pinv_r = Pinv[:rp, :rp]
+        P_r = np.linalg.inv(0.5 * (Pinv_r + Pinv_r.T))
+        theta0, P, rho_i = theta0[:rp].copy(), 0.5 * (P_r + P_r.T), rho_i[:rp].copy()
+        rho = np.sqrt(np.linalg.eigvalsh(Pinv_r)[-1])
+        p, names = rp, names[:rp]
     if robot is not None:
         if (robot.n, robot.p) != (n, p):
             raise ParameterError(f"bounds file {path} is for an arm with n = {n}, p = {p}; robot "
@@ -227,12 +300,12 @@ def load_bounds(path, robot=None) -> dict:
             raise ParameterError(f"bounds file {path}: coefficient {k + 1} is {names[k]!r}, robot "
                                  f"'{robot.label}' calls it {robot.coefficient_names[k]!r} (another arm?)")
     physical = _physical(path, data.get("physical"), robot)
-    out = {"theta0": theta0, "rho": float(rho), "rho_i": rho_i, "P": P, "physical": physical}
-    for arr in (theta0, rho_i, P):
+    out = {"theta0": theta0, "rho": float(rho), "rho_i": rho_i, "P": P, "physical": physical, "actuator": act}
+    for arr in (theta0, rho_i, P) + ((act["theta0"], act["P"], act["rho_i"]) if act else ()):
         arr.flags.writeable = False
     seed = data.get("seed", 0)
     return out | {"n": n, "p": p, "robot": robot_name, "urdf": urdf, "lock": dict(lock),
                   "coefficient_names": tuple(names), "confidence": float(conf),
                   "quantile": float(data.get("quantile", float("nan"))), "seed": int(seed) if isinstance(seed, int) else 0,
-                  "format": FORMAT, "source": str(path), "identification": dict(data.get("identification", {})),
+                  "format": fmt, "source": str(path), "identification": dict(data.get("identification", {})),
                   "provenance": dict(data.get("provenance", {}))}

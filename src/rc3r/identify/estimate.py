@@ -67,7 +67,8 @@ import numpy as np
 from ..errors import ConfigError, ParameterError
 
 __all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit", "ellipsoid_factor", "draw_theta",
-           "check_excitation", "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
+           "check_excitation", "weak_columns", "ARMATURE_COND", "spread_ellipsoid",
+           "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
            "dominating", "ellipsoid"]
 
 #: Largest condition number of the column-scaled regressor that still counts as full rank.
@@ -79,6 +80,11 @@ WEIGHTINGS = ("ordinary", "per-joint")
 #: The in-band covariance measures the noise level over the band holding this share of the estimate's
 #: information (:func:`in_band_covariance`).
 INFO_SHARE = 0.99
+
+#: A rotor-inertia column that leaves the column-scaled regressor's condition number above this is not fitted
+#: (:func:`weak_columns`): it is nearly confounded with a rigid coefficient on this log (its variance would be
+#: about ``cond^2`` times a well-determined column's).
+ARMATURE_COND = 1e4
 
 #: A joint whose filtered position range is below this [rad or m] does not move.
 MOTION_MIN = 1e-2
@@ -155,6 +161,38 @@ def check_excitation(A, names, q) -> None:
         combo = " ".join(f"{'+' if v[k] >= 0 else '-'} {abs(v[k]):.2f} {names[k]}" for k in top)
         raise ConfigError(f"unexciting trajectory: the regressor is rank-deficient (column-scaled condition "
                           f"number {cond:.3g} > {COND_MAX:.0e}); the log does not determine {combo.lstrip('+ ')}")
+
+
+def weak_columns(A, candidates, cond_max: float = None) -> dict:
+    """Columns among ``candidates`` to leave out until the column-scaled regressor (N, n, m) is conditioned.
+
+    While the condition number exceeds ``cond_max`` (default :data:`ARMATURE_COND`), the candidate with
+    the largest weight in the weakest direction (the smallest singular value's right vector) is left out,
+    if that weight is at least 0.1 (else the ill-conditioning is not the candidates'). Returns
+    ``{column: the other column with the largest weight in that direction}`` (what it is confounded with).
+    """
+    cond_max = ARMATURE_COND if cond_max is None else float(cond_max)
+    M = np.asarray(A, dtype=float).reshape(-1, A.shape[-1])
+    norms = np.linalg.norm(M, axis=0)
+    norms[norms == 0] = 1.0
+    Mn = M / norms
+    G = Mn.T @ Mn
+    keep = list(range(M.shape[1]))
+    out = {}
+    while True:
+        lam, vec = np.linalg.eigh(G[np.ix_(keep, keep)])
+        if lam[0] > 0 and np.sqrt(lam[-1] / lam[0]) <= cond_max:
+            return out
+        v = np.abs(vec[:, 0])
+        cand = [i for i, c in enumerate(keep) if c in candidates]
+        if not cand:
+            return out
+        i = max(cand, key=lambda i: v[i])
+        if v[i] < 0.1:
+            return out
+        others = [k for k in range(len(keep)) if k != i]
+        out[keep[i]] = keep[max(others, key=lambda k: v[k])]
+        keep.pop(i)
 
 
 def _lstsq(A, y, w):
@@ -369,6 +407,24 @@ def ellipsoid(cov_theta, confidence: float, dof: float | None = None) -> dict:
     return {"P": P, "chi2": q, "quantile": which, "dof": None if dof is None else float(dof),
             "rho": float(np.sqrt(np.linalg.eigvalsh(Pinv)[-1])), "rho_i": np.sqrt(np.diag(Pinv)),
             "confidence": float(confidence)}
+
+
+def spread_ellipsoid(P, keep, size: int, pairs: dict) -> dict:
+    """An ellipsoid ``P`` (k, k) over coordinates ``keep`` (k,) of ``size``, spread over all of them.
+
+    A coordinate not kept gets an independent half-width: that of the kept coordinate ``pairs[i]`` names
+    (an index into ``keep``), for each ``i`` in ``pairs`` (the slice through the result at 0 along them is
+    ``P``). Returns ``P`` (size, size), ``rho``, ``rho_i`` (size,). Every coordinate must be kept or paired.
+    """
+    Pinv_c = np.linalg.inv(np.asarray(P, dtype=float))
+    Pinv = np.zeros((size, size))
+    Pinv[np.ix_(keep, keep)] = Pinv_c
+    for i, k in pairs.items():
+        Pinv[i, i] = Pinv_c[k, k]
+    Pinv = 0.5 * (Pinv + Pinv.T)
+    P_full = np.linalg.inv(Pinv)
+    return {"P": 0.5 * (P_full + P_full.T), "rho": float(np.sqrt(np.linalg.eigvalsh(Pinv)[-1])),
+            "rho_i": np.sqrt(np.diag(Pinv))}
 
 
 def ellipsoid_factor(P) -> np.ndarray:

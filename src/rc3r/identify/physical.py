@@ -70,7 +70,7 @@ from ..errors import ConfigError
 __all__ = ["GAMMAS", "MAHALANOBIS_SLACK", "MAX_EVALUATIONS", "RULE_STAMPS", "PRIOR_FLOOR", "INSIDE_DRAWS",
            "REALISE_DRAWS", "upper_cholesky", "log_cholesky_of", "standard_of", "standard_jacobian", "divergence",
            "covariance_factor", "realise_log_cholesky", "draws_inside", "PhysicalFit", "fit_physical",
-           "draw_standard"]
+           "draw_standard", "NONNEGATIVE", "JOINT_PRIOR_WIDTH", "joint_prior"]
 
 #: Prior weights tried, largest first (units: the data term is a Mahalanobis distance, chi2-like). The
 #: smallest, 1, is the weakest prior kept: ``exp(-d/2)`` is a Wishart density of one degree of freedom,
@@ -329,6 +329,39 @@ def draws_inside(fit, T, P, rng, draws: int = INSIDE_DRAWS) -> float:
     return float(np.mean(np.isfinite(q) & (q <= 1.0)))
 
 
+#: Joint-column kinds kept >= 0 by the consistent fit (a rotor inertia, viscous and Coulomb friction dissipate).
+NONNEGATIVE = ("viscous", "coulomb", "armature")
+
+#: The weak prior's width: at least this many standard deviations of the unconstrained estimate (:func:`joint_prior`).
+JOINT_PRIOR_WIDTH = 3.0
+
+
+def joint_prior(robot, kinds, columns, c_hat, c_std):
+    """The weak prior of the fitted joint columns: centres and widths (each (len(columns),); NaN: none).
+
+    ``viscous``, ``coulomb``, ``armature``: the URDF's ``damping``, ``friction``, ``armature``
+    (Pinocchio's ``model.damping``, ``model.friction``, ``model.armature``; 0 where it has none), with
+    width ``max(|c0|, |c_hat|, JOINT_PRIOR_WIDTH std)``: one unit of the fit's chi-square at most at the
+    unconstrained estimate, so the data decide wherever they see the column (the pull moves it by at
+    most about ``1 / JOINT_PRIOR_WIDTH^2`` of a standard deviation) and the prior only keeps the Laplace
+    covariance finite. ``offset``: no prior.
+    """
+    model = robot.model
+    n = robot.n
+    kinds = tuple(kinds)
+    urdf = {"viscous": model.damping, "coulomb": model.friction, "armature": model.armature}  # Pinocchio 3+
+    c0 = np.full(len(columns), np.nan)
+    for i, c in enumerate(np.asarray(columns, dtype=int)):
+        kind, j = kinds[c // n], c % n
+        if kind in urdf:
+            vals = np.asarray(urdf[kind], dtype=float).ravel()
+            c0[i] = float(vals[j]) if vals.size == n else 0.0
+    width = np.maximum.reduce([np.abs(np.nan_to_num(c0)), np.abs(np.asarray(c_hat, float)),
+                               JOINT_PRIOR_WIDTH * np.asarray(c_std, float)])
+    width = np.maximum(width, 1e-12 * max(1.0, float(np.max(width, initial=0.0))))
+    return c0, width
+
+
 def _cov_inverse_factor(cov):
     lam, V = np.linalg.eigh(0.5 * (cov + cov.T))
     lam = np.maximum(lam, lam[-1] * 1e-15)
@@ -336,7 +369,7 @@ def _cov_inverse_factor(cov):
 
 
 def fit_physical(robot, x_hat, cov, A, y, friction_kinds, seed: int = 0, gammas=GAMMAS,
-                 slack: float = MAHALANOBIS_SLACK) -> PhysicalFit:
+                 slack: float = MAHALANOBIS_SLACK, columns=None) -> PhysicalFit:
     """The physically consistent estimate nearest the data, pulled toward the URDF (module docstring).
 
     Parameters
@@ -349,13 +382,18 @@ def fit_physical(robot, x_hat, cov, A, y, friction_kinds, seed: int = 0, gammas=
     A, y : ndarray
         Training rows (N, n, m) and logged torques (N, n), for the reported training RMS.
     friction_kinds : tuple of str
-        The friction columns after theta (``viscous``, ``coulomb`` are kept >= 0).
+        The joint-column kinds after theta (:data:`~rc3r.identify.regressors.JOINT_KINDS` order; ``viscous``,
+        ``coulomb`` and ``armature`` are kept >= 0 and weakly pulled toward the URDF's ``damping``,
+        ``friction`` and ``armature``: :func:`joint_prior`).
     seed : int
         Of :func:`standard_map`'s random states (robots without Pinocchio base parameters).
     gammas : sequence of float
         Prior weights tried, largest first.
     slack : float
         The rule's tolerance on the Mahalanobis distance (standard deviations).
+    columns : sequence of int, optional
+        The fitted joint columns among the ``n len(friction_kinds)`` (default all;
+        :func:`~rc3r.identify.regressors.kept_columns`).
 
     Returns
     -------
@@ -374,11 +412,13 @@ def fit_physical(robot, x_hat, cov, A, y, friction_kinds, seed: int = 0, gammas=
     U0inv, eta0, repaired = _prior(robot)
     W = _cov_inverse_factor(np.asarray(cov, dtype=float))
     nf = m - p
+    cols = np.arange(nf) if columns is None else np.asarray(columns, dtype=int)
+    col_kinds = [tuple(friction_kinds)[c // n] for c in cols]
     lo = np.full(10 * nb + nf, -np.inf)
-    for i, kind in enumerate(friction_kinds):
-        if kind in ("viscous", "coulomb"):
-            lo[10 * nb + i * n:10 * nb + (i + 1) * n] = 0.0
+    lo[10 * nb:][np.array([k in NONNEGATIVE for k in col_kinds], dtype=bool)] = 0.0
     hi = np.full_like(lo, np.inf)
+    c0, c_scale = joint_prior(robot, friction_kinds, cols, x_hat[p:], np.sqrt(np.maximum(np.diag(cov)[p:], 0.0)))
+    pulled = np.isfinite(c0)
 
     def x_of(z):
         return np.concatenate([T @ standard_of(z[:10 * nb]), z[10 * nb:]])
@@ -386,7 +426,8 @@ def fit_physical(robot, x_hat, cov, A, y, friction_kinds, seed: int = 0, gammas=
     def residuals(z, g):
         r_d = W @ (x_of(z) - x_hat)
         r_p = np.concatenate([_prior_residuals(z[10 * k:10 * k + 10], U0inv[k])[0] for k in range(nb)])
-        return np.concatenate([r_d, np.sqrt(g) * r_p])
+        r_j = (z[10 * nb:][pulled] - c0[pulled]) / c_scale[pulled]
+        return np.concatenate([r_d, np.sqrt(g) * r_p, r_j])
 
     def jacobian(z, g):
         G = np.zeros((m, z.size))
@@ -395,7 +436,9 @@ def fit_physical(robot, x_hat, cov, A, y, friction_kinds, seed: int = 0, gammas=
         Jp = np.zeros((10 * nb, z.size))
         for k in range(nb):
             Jp[10 * k:10 * k + 10, 10 * k:10 * k + 10] = _prior_residuals(z[10 * k:10 * k + 10], U0inv[k])[1]
-        return np.vstack([W @ G, np.sqrt(g) * Jp]), G
+        Jj = np.zeros((int(pulled.sum()), z.size))
+        Jj[np.arange(Jj.shape[0]), 10 * nb + np.nonzero(pulled)[0]] = 1.0 / c_scale[pulled]
+        return np.vstack([W @ G, np.sqrt(g) * Jp, Jj]), G
 
     A = np.asarray(A, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -404,7 +447,7 @@ def fit_physical(robot, x_hat, cov, A, y, friction_kinds, seed: int = 0, gammas=
         return np.sqrt(np.mean((y - A @ x) ** 2, axis=0))
 
     rms_hat = np.maximum(train_rms(x_hat), 1e-300)
-    z = np.concatenate([eta0, np.clip(x_hat[p:], lo[10 * nb:], None)])
+    z = np.concatenate([eta0, np.maximum(x_hat[p:], lo[10 * nb:])])
     path, fits = [], []
     for g in gammas:
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):

@@ -5,7 +5,7 @@ r"""The identification pipeline: from a log to theta, friction, covariance, vali
 1. the split: the first ``1 - F`` of the log's duration trains, the last ``F`` is held out (the
    filters run over the whole log once; their start-up at both ends is unused);
 2. the settings: cut-off, velocity source (logged or differentiated), weighting (ordinary or
-   per-joint noise) and Coulomb smoothing velocity, each given or chosen by blocked
+   per-joint noise), Coulomb smoothing velocity and rotor inertias (armature), each given or chosen by blocked
    cross-validation on the training part only (:func:`rc3r.identify.selection.select`; the
    scores behind the choice are kept in ``selection``);
 3. resampling and parallel filtering (:func:`~rc3r.identify.filtering.prepare`), the regressor
@@ -40,7 +40,7 @@ from ..errors import ConfigError
 from . import estimate as _est
 from . import filtering as _flt
 from . import selection as _sel
-from .regressors import COULOMB_LAW, FRICTION_KINDS, friction_names
+from .regressors import ARMATURE_CHOICES, COULOMB_LAW, FRICTION_KINDS, friction_names, kept_columns, merged_columns
 
 __all__ = ["Identification", "identify", "MAX_RAW_STAMPS", "COVARIANCES"]
 
@@ -74,6 +74,23 @@ class Identification:
     friction_law: dict = field(default_factory=dict)
     physical: dict | None = None
     physical_fit: object = field(default=None, repr=False)
+    columns: tuple | None = None
+    armature: dict | None = None
+    confidence: float = 0.95
+    dof: float | None = None
+
+    @property
+    def joint_columns(self) -> np.ndarray:
+        """Indices (m - p,) of the fitted joint columns among the ``n len(friction_kinds)`` of
+        :func:`~rc3r.identify.regressors.joint_columns` (all of them unless an armature column merged)."""
+        n = self.sigma.size
+        return np.arange(n * len(self.friction_kinds)) if self.columns is None else np.asarray(self.columns, int)
+
+    def _full(self, v, fill: float = 0.0) -> np.ndarray:
+        """The fitted joint coefficients (m - p,) spread over all ``n len(friction_kinds)`` (``fill`` elsewhere)."""
+        out = np.full(self.sigma.size * len(self.friction_kinds), fill)
+        out[self.joint_columns] = v
+        return out
 
     def held_out_rms(self, x=None) -> np.ndarray:
         """Held-out RMS per joint (n,) [N m] of coefficients ``x`` (m,) against the logged torques.
@@ -100,7 +117,8 @@ class Identification:
     def friction(self) -> dict:
         """``{kind: (n,) coefficients}`` for the identified friction kinds."""
         n = self.sigma.size
-        return {k: self.x[self.p + i * n: self.p + (i + 1) * n] for i, k in enumerate(self.friction_kinds)}
+        full = self._full(self.x[self.p:])
+        return {k: full[i * n:(i + 1) * n] for i, k in enumerate(self.friction_kinds)}
 
     def bounds(self, which: str = "auto") -> dict:
         """``theta0, rho, rho_i, P, confidence, chi2`` of the confidence ellipsoid (and ``physical``).
@@ -110,21 +128,51 @@ class Identification:
         ``"unconstrained"`` the least-squares estimate's, ``"auto"`` the first when it was fitted.
         """
         if which == "unconstrained" or (which == "auto" and self.physical_fit is None):
-            return {"theta0": self.theta, **self.ellipsoid}
+            return {"theta0": self.theta, **self.ellipsoid, "actuator": self.actuator_bounds(self.x)}
         if self.physical_fit is None:
             raise ConfigError("no physically consistent fit (identify(..., physical=False))")
         f = self.physical_fit
         ph = self.physical
-        return {"theta0": f.theta, **ph["_ellipsoid"],
+        return {"theta0": f.theta, **ph["_ellipsoid"], "actuator": self.actuator_bounds(f.x),
                 "physical": {"standard_parameters": f.standard, "log_cholesky": f.eta,
                              "log_cholesky_cov": f.cov_eta, "gamma": f.gamma,
                              "draws_inside": ph["draws_inside"]["share"],
                              "masses": f.masses}}
 
+    def actuator_bounds(self, x) -> dict:
+        """The ellipsoid over the rigid **and** joint coefficients about ``x`` (m,) (``rc3r-bounds/2``).
+
+        Shaped by the fit's covariance over all m unknowns at the fit's confidence (quantile over m
+        dimensions), then spread over every joint column of ``friction_kinds``: a merged armature column
+        (not fitted) has centre 0 and, for a full-rank ellipsoid, an independent half-width equal to the
+        ``rho_i`` of the rigid coefficient it merged with (a slice through the ellipsoid at 0 is the fitted
+        one: the true coefficients, written with their rotor inertia in that rigid coefficient, are inside it
+        exactly when they were). Returns ``kinds``, ``coulomb_velocity``, ``rigid_p``, ``coefficient_names``,
+        ``theta0`` (p + m_all,), ``P``, ``rho``, ``rho_i``, ``quantile``, ``merged`` (names).
+        """
+        p, n = self.p, self.sigma.size
+        ell = _est.ellipsoid(self.cov, self.confidence, dof=self.dof)
+        all_names = friction_names(self.friction_kinds, n)
+        names_c = list(self.coefficient_names) + [all_names[c] for c in self.joint_columns]
+        merged = dict((self.armature or {}).get("merged") or {}) if "armature" in self.friction_kinds else {}
+        a0 = p + self.friction_kinds.index("armature") * n if merged else 0
+        pairs = {a0 + int(name[2:]) - 1: names_c.index(rigid) for name, rigid in merged.items()}
+        full = _est.spread_ellipsoid(ell["P"], np.concatenate([np.arange(p), p + self.joint_columns]),
+                                     p + n * len(self.friction_kinds), pairs)
+        x = np.asarray(x, dtype=float)
+        return {"kinds": list(self.friction_kinds),
+                "coulomb_velocity": float(self.friction_law.get("coulomb_velocity", 0.0)),
+                "rigid_p": int(p), "coefficient_names": list(self.coefficient_names) + list(all_names),
+                "theta0": np.concatenate([x[:p], self._full(x[p:])]), **full, "quantile": float(ell["chi2"]),
+                "merged": merged}
+
     def to_dict(self) -> dict:
         """JSON-ready: every field of ``identified.json`` except provenance."""
-        names = tuple(self.coefficient_names) + friction_names(self.friction_kinds, self.sigma.size)
+        all_names = friction_names(self.friction_kinds, self.sigma.size)
+        names = tuple(self.coefficient_names) + tuple(all_names[c] for c in self.joint_columns)
         se = np.sqrt(np.diag(self.cov))
+        se_j = self._full(se[self.p:], np.nan)
+        n = self.sigma.size
         ell = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.ellipsoid.items() if k != "P"}
         return {
             "robot": self.robot,
@@ -132,8 +180,9 @@ class Identification:
             "theta_std": se[:self.p].tolist(),
             "coefficient_names": list(self.coefficient_names),
             "friction": {k: v.tolist() for k, v in self.friction().items()},
-            "friction_std": {k: se[self.p + i * self.sigma.size: self.p + (i + 1) * self.sigma.size].tolist()
+            "friction_std": {k: [None if not np.isfinite(v) else float(v) for v in se_j[i * n:(i + 1) * n]]
                              for i, k in enumerate(self.friction_kinds)},
+            "armature": self.armature,
             "unknowns": list(names),
             "covariance": self.cov.tolist(),
             "noise": {"sigma": self.sigma.tolist(), "sigma_raw": self.sigma_raw.tolist(),
@@ -155,25 +204,25 @@ class Identification:
         }
 
 
-def _raw_rows(robot, prep, t, kinds, predict: bool = False, v_s: float = 0.0) -> np.ndarray:
-    """Unfiltered regressor ``[Y | friction]`` (N, n, m) at stamps ``t`` from the fit's (or prediction) states."""
+def _raw_rows(robot, prep, t, kinds, predict: bool = False, v_s: float = 0.0, columns=None) -> np.ndarray:
+    """Unfiltered regressor ``[Y | joint columns]`` (N, n, m) at stamps ``t`` from the fit's (or prediction) states."""
     from .regressors import identification_regressor
 
     states = prep.predict if predict else (prep.q, prep.qd, prep.qdd)
     at = [np.column_stack([np.interp(t, prep.t, X[:, j]) for j in range(X.shape[1])]) for X in states]
-    return identification_regressor(robot, *at, kinds, v_s)
+    return identification_regressor(robot, *at, kinds, v_s, columns)
 
 
-def _filtered_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
-    """``L[Y | friction]`` (K, n, m) on the coarse grid (:func:`rc3r.identify.selection.filtered_rows`)."""
-    return _sel.filtered_rows(robot, prep, kinds, v_s)
+def _filtered_rows(robot, prep, kinds, v_s: float = 0.0, columns=None) -> np.ndarray:
+    """``L[Y | joint columns]`` (K, n, m) on the coarse grid (:func:`rc3r.identify.selection.filtered_rows`)."""
+    return _sel.filtered_rows(robot, prep, kinds, v_s, columns=columns)
 
 
 def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: float | None = None,
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
              consistency: bool = True, covariance: str = "in-band", seed: int = 0, weighting: str = "auto",
              coulomb_velocity: float | None = None, folds: int = _sel.FOLDS,
-             physical: bool = True) -> Identification:
+             physical: bool = True, armature: str = "auto") -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
 
     Parameters
@@ -213,10 +262,16 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         :data:`~rc3r.identify.selection.COULOMB_VELOCITIES`.
     folds : int
         Blocks of the cross-validation.
+    armature : str
+        A rotor inertia per joint (the column ``qdd_j``): ``"auto"`` (cross-validated), ``"on"``, ``"off"``;
+        a joint whose column the rigid regressor already holds is merged, not fitted
+        (:func:`~rc3r.identify.regressors.merged_columns`).
     physical : bool
         Fit the physically consistent estimate (:func:`rc3r.identify.physical.fit_physical`; SciPy only).
     """
     kinds = tuple(k for k in FRICTION_KINDS if k in tuple(friction))
+    if armature not in ARMATURE_CHOICES:
+        raise ConfigError(f"armature must be {', '.join(ARMATURE_CHOICES)}, got {armature!r}")
     if log.n != robot.n:
         raise ConfigError(f"log has {log.n} joints, robot '{robot.label}' has {robot.n}")
     if not 0.0 < test_fraction < 1.0:
@@ -253,23 +308,59 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     v_cands = _sel.COULOMB_VELOCITIES if coulomb_velocity is None else (float(coulomb_velocity),)
     if "coulomb" not in kinds:
         v_cands = (0.0 if coulomb_velocity is None else float(coulomb_velocity),)
+    merged = merged_columns(robot, seed) if armature != "off" else {}
+    arm_opts = {"auto": (False, True), "on": (True,), "off": (False,)}[armature]
+    if len(merged) == robot.n:
+        arm_opts = (False,)  # every rotor inertia merges with a rigid coefficient: nothing to fit
     sel = None
-    if max(len(cutoffs), len(vels), len(weights), len(v_cands)) > 1:
-        sel = _sel.select(robot, log, kinds, t_split, cutoffs, vels, weights, v_cands, grids=grids, folds=folds)
+    if max(len(cutoffs), len(vels), len(weights), len(v_cands), len(arm_opts)) > 1:
+        sel = _sel.select(robot, log, kinds, t_split, cutoffs, vels, weights, v_cands, grids=grids, folds=folds,
+                          armature=arm_opts, merged=tuple(merged))
         c = sel["chosen"]
-        fc, vel, wgt, v_s = c["cutoff_hz"], c["velocities"], c["weighting"], c["coulomb_velocity"]
+        fc, vel, wgt, v_s, arm = (c["cutoff_hz"], c["velocities"], c["weighting"], c["coulomb_velocity"],
+                                  c["armature"])
     else:
-        fc, vel, wgt, v_s = cutoffs[0], vels[0], weights[0], v_cands[0]
+        fc, vel, wgt, v_s, arm = cutoffs[0], vels[0], weights[0], v_cands[0], arm_opts[0]
     chosen = "given (--filter)" if cutoff_hz is not None else "cross-validation"
     prep = _flt.prepare(log, fc, vel, grids=grids)
-    A = _filtered_rows(robot, prep, kinds, v_s)
     train = prep.usable & (prep.t <= t_split)
     test = prep.usable & (prep.t > t_split)
     if not test.any():
         raise ConfigError(f"no held-out samples: the last {test_fraction:g} of the log lies in the filter's "
                           f"start-up ({_flt.EDGE / fc:.3g} s); give a longer log or a larger --test-fraction")
-    names = tuple(robot.coefficient_names) + friction_names(kinds, robot.n)
-    _est.check_excitation(A[train], names, prep.q[train])
+    arm_note = None
+    partner = {j: robot.coefficient_names[k] for j, k in merged.items()}
+    while True:
+        kinds_all = kinds + (("armature",) if arm else ())
+        cols = kept_columns(kinds_all, robot.n, tuple(merged) if arm else ())
+        A = _filtered_rows(robot, prep, kinds_all, v_s, cols)
+        all_names = friction_names(kinds_all, robot.n)
+        names = tuple(robot.coefficient_names) + tuple(all_names[c] for c in cols)
+        if arm:  # rotor inertias nearly confounded with a rigid coefficient on this log: merged, not fitted
+            ia = [robot.p + i for i, c in enumerate(cols) if all_names[c].startswith("ia")]
+            weak = _est.weak_columns(A[train], ia)
+            if weak:
+                partner |= {int(names[k][2:]) - 1: names[w] for k, w in weak.items()}
+                merged = dict(merged) | {int(names[k][2:]) - 1: w for k, w in weak.items()}
+                cols = kept_columns(kinds_all, robot.n, tuple(merged))
+                A = _filtered_rows(robot, prep, kinds_all, v_s, cols)
+                names = tuple(robot.coefficient_names) + tuple(all_names[c] for c in cols)
+        try:
+            _est.check_excitation(A[train], names, prep.q[train])
+            break
+        except ConfigError as exc:
+            if not (arm and armature == "auto"):
+                raise
+            arm, arm_note = False, f"chosen by cross-validation, dropped: {exc}"
+    arm_info = {"fitted": bool(arm), "option": armature,
+                "chosen": arm_note or ("cross-validation" if len(arm_opts) > 1 and sel is not None else
+                                       f"given (--armature {armature})"),
+                "merged": {f"ia{j + 1}": partner[j] for j in sorted(merged)},
+                "meaning": "a rotor inertia per joint (Pinocchio's armature [kg m^2], column qdd_j in joint j's row); "
+                           "merged: joints whose column the rigid regressor already holds (over random states), not "
+                           "fitted: their rotor inertia is part of the named rigid coefficient; or, on this log, "
+                           "nearly confounded with the named coefficient (column-scaled condition number above "
+                           "estimate.ARMATURE_COND)"}
     fit = _est.weighted_least_squares(A[train], prep.tau[train], gain=prep.noise_gain, step=prep.step,
                                       weighting=wgt)
     # the unfiltered residual at the training stamps (evenly thinned): its spectrum sets the covariance
@@ -277,8 +368,9 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     ok = (log.t >= t0 + edge) & (log.t <= grid[-1] - edge)
     tr_idx = np.nonzero(ok & (log.t <= t_split))[0]
     tr_idx = tr_idx[np.unique(np.linspace(0, tr_idx.size - 1, min(tr_idx.size, MAX_RAW_STAMPS)).astype(int))]
-    raw_res = log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds, v_s=v_s) @ fit.x
-    sigma_raw = np.sqrt(np.mean((log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds, True, v_s) @ fit.x)
+    raw_res = log.tau[tr_idx] - _raw_rows(robot, prep, log.t[tr_idx], kinds_all, v_s=v_s, columns=cols) @ fit.x
+    sigma_raw = np.sqrt(np.mean((log.tau[tr_idx]
+                                 - _raw_rows(robot, prep, log.t[tr_idx], kinds_all, True, v_s, cols) @ fit.x)
                                 ** 2, axis=0))
     density = _flt.residual_density(log.t[tr_idx], raw_res, fc, prep.fs)
     parts = {"white": fit.cov, "spectral": _est.spectral_covariance(A[train], fit.weights, prep.fs_coarse, density)}
@@ -295,7 +387,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     te_idx = np.nonzero(ok & (log.t > t_split))[0]
     if te_idx.size == 0:
         raise ConfigError("no held-out time stamps outside the filter's start-up; give a longer log")
-    R_te = _raw_rows(robot, prep, log.t[te_idx], kinds, True, v_s)
+    R_te = _raw_rows(robot, prep, log.t[te_idx], kinds_all, True, v_s, cols)
     pred = R_te @ fit.x
     tau_te = log.tau[te_idx]
     half = fit.band(R_te, sigma_raw, confidence)
@@ -345,15 +437,18 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         from .physical import RULE_STAMPS
 
         rule = tr_idx[np.unique(np.linspace(0, tr_idx.size - 1, min(tr_idx.size, RULE_STAMPS)).astype(int))]
-        phys, pfit = _physical(robot, fit, parts["white"], kinds, _raw_rows(robot, prep, log.t[rule], kinds, True, v_s),
+        phys, pfit = _physical(robot, fit, parts["white"], kinds_all,
+                               _raw_rows(robot, prep, log.t[rule], kinds_all, True, v_s, cols),
                                log.tau[rule], A[test], prep.tau[test], R_te, tau_te, confidence, max(nu, 1.5),
-                               sigma_raw, seed)
+                               sigma_raw, seed, cols)
     return Identification(robot.describe() | {"coefficient_names": list(robot.coefficient_names)},
-                          tuple(robot.coefficient_names), kinds, fit.x, fit.cov, p, fit.sigma, sigma_raw, ell,
-                          filt, validation, reg, log.describe(), cons, held, sel, law, phys, pfit)
+                          tuple(robot.coefficient_names), kinds_all, fit.x, fit.cov, p, fit.sigma, sigma_raw, ell,
+                          filt, validation, reg, log.describe(), cons, held, sel, law, phys, pfit,
+                          tuple(int(c) for c in cols), arm_info, confidence, max(nu, 1.5))
 
 
-def _physical(robot, fit, metric, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confidence, dof, sigma_raw, seed):
+def _physical(robot, fit, metric, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te, confidence, dof, sigma_raw, seed,
+              cols):
     """The consistent fit, its ellipsoid, held-out validation and share of physical draws inside (JSON-ready)."""
     import time
 
@@ -364,7 +459,7 @@ def _physical(robot, fit, metric, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te,
     t0 = time.perf_counter()
     # the white covariance is the projection's metric (it weighs the data against the prior; the reported
     # covariance, fit.cov, shapes the ellipsoid below)
-    pf = fit_physical(robot, fit.x, metric, R_tr, tau_tr, kinds, seed=seed)
+    pf = fit_physical(robot, fit.x, metric, R_tr, tau_tr, kinds, seed=seed, columns=cols)
     elapsed = time.perf_counter() - t0
     p = robot.p
     # the bounds' ellipsoid: centred at the consistent estimate, shaped by the data's covariance (the
@@ -396,10 +491,17 @@ def _physical(robot, fit, metric, kinds, R_tr, tau_tr, A_te, y_te, R_te, tau_te,
     links = [{k: float(v) for k, v in zip(STD_KEYS, pf.standard[10 * b:10 * b + 10])} for b in range(nb)]
     se = np.sqrt(np.diag(pf.cov))
     n = robot.n
+
+    def spread(v, fill):
+        out = np.full(n * len(kinds), fill)
+        out[np.asarray(cols, dtype=int)] = v
+        return out
     out = {
         "theta": pf.theta.tolist(), "theta_std": se[:p].tolist(),
-        "friction": {k: pf.x[p + i * n:p + (i + 1) * n].tolist() for i, k in enumerate(kinds)},
-        "friction_std": {k: se[p + i * n:p + (i + 1) * n].tolist() for i, k in enumerate(kinds)},
+        "friction": {k: spread(pf.x[p:], 0.0)[i * n:(i + 1) * n].tolist() for i, k in enumerate(kinds)},
+        "friction_std": {k: [None if not np.isfinite(v) else float(v)
+                             for v in spread(se[p:], np.nan)[i * n:(i + 1) * n]]
+                         for i, k in enumerate(kinds)},
         "links": links, "log_cholesky": pf.eta.tolist(),
         "masses": pf.masses.tolist(), "urdf_masses": pi0[0::10].tolist(),
         "mass_ratio": (pf.masses / np.maximum(pi0[0::10], 1e-300)).tolist(),

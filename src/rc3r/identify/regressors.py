@@ -22,6 +22,11 @@ noise-level friction. ``rc3r identify`` chooses ``v_s`` by cross-validation
 (:mod:`rc3r.identify.selection`) and records it (``friction_law`` in identified.json,
 ``coulomb_velocity`` in bounds.toml's ``[identification]``) so that models and plants use the same
 law (:func:`coulomb`).
+
+A geared joint's rotor inertia ``I_a`` (Pinocchio's ``armature``) adds the column ``qdd_j``
+(:data:`JOINT_KINDS`' ``armature``). Where the rigid regressor already holds that column (joint 1 about
+the gravity axis: its rotor inertia and the link's ``ZZ`` are one coefficient) it is merged, not fitted
+(:func:`merged_columns`, :func:`kept_columns`).
 """
 from __future__ import annotations
 
@@ -29,8 +34,9 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["FRICTION_KINDS", "JOINT_KINDS", "coulomb", "COULOMB_LAW", "parse_friction", "friction_names",
-           "friction_columns", "joint_columns", "identification_regressor"]
+__all__ = ["FRICTION_KINDS", "JOINT_KINDS", "ARMATURE_CHOICES", "coulomb", "COULOMB_LAW", "parse_friction",
+           "friction_names", "friction_columns", "joint_columns", "identification_regressor", "merged_columns",
+           "kept_columns", "MERGE_RTOL"]
 
 #: Friction kinds and the prefix of their coefficient names.
 FRICTION_KINDS = {"viscous": "fv", "coulomb": "fc", "offset": "f0"}
@@ -39,6 +45,13 @@ FRICTION_KINDS = {"viscous": "fv", "coulomb": "fc", "offset": "f0"}
 #: ``model.armature``: the column is the joint's acceleration ``a_j``), and the prefix of their names.
 #: Columns of several kinds follow ``theta`` in this order: for every kind, joints 1..n.
 JOINT_KINDS = {**FRICTION_KINDS, "armature": "ia"}
+
+#: ``rc3r identify --armature``: chosen by cross-validation (``auto``, the default), always or never fitted.
+ARMATURE_CHOICES = ("auto", "on", "off")
+
+#: An armature column whose distance to the span of the rigid regressor is below this share of its norm
+#: (over random states) is merged into the rigid coefficients (:func:`merged_columns`).
+MERGE_RTOL = 1e-8
 
 #: The Coulomb law, as recorded in identified.json and bounds.toml.
 COULOMB_LAW = "f_c tanh(qd / v_s) (sign(qd) when v_s = 0)"
@@ -103,10 +116,53 @@ def joint_columns(qd, a, kinds, v_s: float = 0.0) -> np.ndarray:
     return out
 
 
-def identification_regressor(robot, q, qd, qdd, kinds, v_s: float = 0.0) -> np.ndarray:
-    """``[Y(q, qd, qd, qdd) | friction]``, shape (N, n, p + n len(kinds)); ``v_s``: :func:`coulomb`."""
+def identification_regressor(robot, q, qd, qdd, kinds, v_s: float = 0.0, columns=None) -> np.ndarray:
+    """``[Y(q, qd, qd, qdd) | joint columns]``, shape (N, n, p + n len(kinds)); ``v_s``: :func:`coulomb`.
+
+    ``kinds`` in :data:`JOINT_KINDS` order (:func:`joint_columns`, the armature column is ``qdd``);
+    ``columns``: only these joint columns (indices into the ``n len(kinds)`` of :func:`joint_columns`,
+    :func:`kept_columns`), shape (N, n, p + len(columns)).
+    """
     q, qd, qdd = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, qd, qdd))
     Y = np.asarray(robot.regressor(q, qd, qd, qdd), dtype=float)
     if Y.ndim == 2:
         Y = Y[None]
-    return np.concatenate([Y, friction_columns(qd, kinds, v_s)], axis=2)
+    F = joint_columns(qd, qdd, kinds, v_s)
+    return np.concatenate([Y, F if columns is None else F[:, :, np.asarray(columns, dtype=int)]], axis=2)
+
+
+def merged_columns(robot, seed: int = 0, states: int | None = None, rtol: float = MERGE_RTOL) -> dict:
+    """The armature columns in the span of the rigid regressor: ``{joint j (0-based): coefficient index}``.
+
+    The column of joint ``j``'s rotor inertia is ``qdd_j`` in its own row. When the rigid regressor ``Y``
+    already holds it (joint 1 about the gravity axis: ``tau_1 = ZZ_1 qdd_1 + ...``, nothing else in the
+    other rows) the two cannot be told apart by any log: the rotor inertia *merges* with that rigid
+    coefficient (the one with the largest weight in the column's expansion is named). Tested on
+    ``states`` random states (``numpy.random.default_rng(seed)``, ``q`` in [-pi, pi], ``qd``, ``qdd`` in
+    [-3, 3]): a column whose least-squares distance to the span of ``Y`` is at most ``rtol`` of its norm.
+    """
+    n, p = robot.n, robot.p
+    states = int(states or max(20, 4 * p))
+    rng = np.random.default_rng(seed)
+    Q = rng.uniform(-np.pi, np.pi, (states, n))
+    QD, QDD = rng.uniform(-3.0, 3.0, (2, states, n))
+    Y = np.asarray(robot.regressor(Q, QD, QD, QDD), dtype=float).reshape(-1, p)
+    scale = np.linalg.norm(Y, axis=0)
+    scale[scale == 0] = 1.0
+    out = {}
+    for j in range(n):
+        c = np.zeros((states, n))
+        c[:, j] = QDD[:, j]
+        c = c.ravel()
+        coef = np.linalg.lstsq(Y / scale, c, rcond=None)[0]
+        if np.linalg.norm(c - (Y / scale) @ coef) <= rtol * np.linalg.norm(c):
+            out[j] = int(np.argmax(np.abs(coef / scale)))
+    return out
+
+
+def kept_columns(kinds, n: int, merged=()) -> np.ndarray:
+    """Indices into :func:`joint_columns`' ``n len(kinds)`` columns of those fitted: all but the armature
+    columns of the joints in ``merged`` (0-based; :func:`merged_columns`)."""
+    kinds = tuple(kinds)
+    drop = {kinds.index("armature") * n + j for j in merged} if "armature" in kinds else set()
+    return np.array([c for c in range(n * len(kinds)) if c not in drop], dtype=int)

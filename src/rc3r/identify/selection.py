@@ -11,7 +11,10 @@ What is chosen (:func:`select`), among what the log allows:
 * the weighting of the least squares, ordinary or per-joint noise
   (:data:`~rc3r.identify.estimate.WEIGHTINGS`);
 * the Coulomb smoothing velocity ``v_s`` of ``tanh(qd / v_s)`` among :data:`COULOMB_VELOCITIES`
-  (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``).
+  (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``);
+* whether a rotor inertia per joint (armature, the column ``qdd_j``) is fitted: kept only when it lowers
+  the best score by more than :data:`ARMATURE_GAIN` (joints whose column the rigid regressor holds are
+  never fitted: ``merged``).
 
 How a setting is scored. The training part (the log's first ``1 - F``, outside the filters'
 start-up) is cut into :data:`FOLDS` contiguous blocks of equal duration. For every block, the
@@ -22,11 +25,16 @@ fitted ``L[tau]`` would carry the block's own noise), and predicts the block's *
 (unfiltered, resampled) torques at the states low-passed at ``f_c``: the held-out prediction of
 :mod:`rc3r.identify.pipeline`, on training data. The score of a setting is the geometric mean
 over the joints of the per-joint RMS pooled over the blocks [N m] (every joint counts alike,
-whatever its torque scale); the lowest wins.
+whatever its torque scale); the lowest wins (:data:`RULE`).
 
-The search is in two stages, to keep ``rc3r identify`` fast: (1) every cut-off x velocity source x
-weighting at ``v_s =`` :data:`COULOMB_START`; (2) every ``v_s`` x weighting at the chosen cut-off
-and source. The cross-validation's coarse grid is coarser than the final fit's
+The search scores every cut-off x velocity source x ``v_s`` x weighting, with the rotor inertias when they
+are a candidate (the larger model), then every weighting without them at the chosen settings. The lowest
+geometric mean wins (:data:`RULE`). Two stages (:data:`TWO_STAGE`: the cut-off and source at ``v_s =``
+:data:`COULOMB_START`, then ``v_s``) are kept as an option: on logs with a large ``sign`` Coulomb law the best
+cut-off depends on ``v_s`` (the stand-in arms of docs/identification.md 2.12 at seed 1: 1.4-1.9 x the best
+plain fit with two stages, 1.06 with every combination). The worst per-joint ratio rule is kept as an option
+too (measured worse on the geared UR5 stand-in at seed 0).
+The cross-validation's coarse grid is coarser than the final fit's
 (:data:`CV_COARSE_FACTOR`), and its rows are thinned to a rate of at least :data:`CV_RATE_FACTOR`
 ``x f_c``. Every fold's fit solves the normal equations from per-joint Gram matrices summed over
 segments (computed once per setting), so the folds and weightings cost little beyond building the
@@ -41,9 +49,10 @@ import numpy as np
 from ..errors import ConfigError
 from . import filtering as _flt
 from .estimate import WEIGHTINGS
-from .regressors import coulomb, friction_columns, identification_regressor
+from .regressors import coulomb, identification_regressor, joint_columns, kept_columns
 
 __all__ = ["FOLDS", "GUARD", "COULOMB_VELOCITIES", "COULOMB_START", "CV_RATE_FACTOR", "CV_COARSE_FACTOR",
+           "ARMATURE_GAIN",
            "filtered_rows",
            "predict_rows", "cv_scores", "select"]
 
@@ -73,16 +82,31 @@ CV_COARSE_FACTOR = 4.0
 #: folds' fits at 2 Hz on a 10 s log: scores 4x the held-out RMS, 2 Hz never chosen.)
 GUARD = 1.5
 
+#: The model with a rotor inertia per joint is chosen only when its score is lower by more than this share
+#: (the simpler model wins ties: on arms without rotor inertia the two score within noise, 1e-3 on the 3R).
+ARMATURE_GAIN = 0.01
+
+#: How the scored settings are ranked: ``"worst-ratio"`` (default): the lowest worst ratio over the joints of a
+#: setting's RMS to that joint's best RMS over every setting scored (ties: the geometric mean); or
+#: ``"geometric-mean"``: the lowest geometric mean over the joints.
+RULE = "geometric-mean"
+
+#: Search cut-off x source at one ``v_s`` first, then ``v_s`` (True), or every combination (False, the default).
+TWO_STAGE = False
+
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
 
 
-def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dict | None = None) -> np.ndarray:
-    """``L[Y | friction]`` (K, n, m) on the coarse grid (friction filtered at the full rate).
+def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dict | None = None,
+                  columns=None) -> np.ndarray:
+    """``L[Y | joint columns]`` (K, n, m) on the coarse grid (friction filtered at the full rate).
 
-    ``arm_rows``: ``L[Y]`` (K, n, p) when already computed (only the friction columns depend on
-    ``v_s``); ``memo``: a dict that keeps the filtered viscous and offset columns between calls on
-    the same ``prep``.
+    ``kinds`` in :data:`~rc3r.identify.regressors.JOINT_KINDS` order (the armature column, ``qdd``, is
+    filtered on the coarse grid like ``Y``); ``columns``: only these joint columns
+    (:func:`~rc3r.identify.regressors.kept_columns`). ``arm_rows``: ``L[Y]`` (K, n, p) when already
+    computed (only the friction columns depend on ``v_s``); ``memo``: a dict that keeps the filtered
+    viscous, offset and armature columns between calls on the same ``prep``.
     """
     LY = prep.filter_coarse(robot.regressor(prep.q, prep.qd, prep.qd, prep.qdd)) if arm_rows is None else arm_rows
     n = prep.q.shape[1]
@@ -95,15 +119,18 @@ def filtered_rows(robot, prep, kinds, v_s: float = 0.0, arm_rows=None, memo: dic
             col = prep.filter_full(coulomb(qd, v_s))
         else:
             if kind not in memo:
-                memo[kind] = prep.filter_full(qd if kind == "viscous" else np.ones_like(qd))
+                memo[kind] = (prep.filter_coarse(prep.qdd) if kind == "armature" else
+                              prep.filter_full(qd if kind == "viscous" else np.ones_like(qd)))
             col = memo[kind]
         LF[:, idx, k * n + idx] = col[:LY.shape[0]]
+    if columns is not None:
+        LF = LF[:, :, np.asarray(columns, dtype=int)]
     return np.concatenate([np.asarray(LY, dtype=float), LF], axis=2)
 
 
-def predict_rows(robot, prep, kinds, v_s: float = 0.0) -> np.ndarray:
-    """``[Y | friction]`` (K, n, m) on the coarse grid at the prediction states (low-passed at the cut-off)."""
-    return identification_regressor(robot, *prep.predict, kinds, v_s)
+def predict_rows(robot, prep, kinds, v_s: float = 0.0, columns=None) -> np.ndarray:
+    """``[Y | joint columns]`` (K, n, m) on the coarse grid at the prediction states (low-passed at the cut-off)."""
+    return identification_regressor(robot, *prep.predict, kinds, v_s, columns)
 
 
 def _solve(G, b, w) -> np.ndarray:
@@ -204,8 +231,8 @@ def _score(rms) -> float:
 
 
 def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, coulomb_velocities,
-           grids=None, folds: int = FOLDS) -> dict:
-    """Choose cut-off, velocity source, weighting and Coulomb smoothing by cross-validation (module docstring).
+           grids=None, folds: int = FOLDS, armature=(False,), merged=()) -> dict:
+    """Choose cut-off, velocity source, weighting, Coulomb smoothing and armature by cross-validation.
 
     Parameters
     ----------
@@ -221,37 +248,59 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         The log resampled once.
     folds : int
         Contiguous blocks of the training part.
+    armature : sequence of bool
+        Fit a rotor inertia per joint (``True``), or not; with both, stages 1 and 2 fit it and stage 3
+        scores the model without it at the chosen settings (module docstring).
+    merged : sequence of int
+        Joints (0-based) whose armature column is in the rigid regressor's span (not fitted:
+        :func:`~rc3r.identify.regressors.merged_columns`).
 
     Returns
     -------
     dict
-        ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``score``),
-        ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
+        ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``armature``,
+        ``score``), ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
         (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``,
         ``best_score``, ``method`` (one paragraph), ``score`` (its meaning).
     """
     g = _flt.Grids.of(log) if grids is None else grids
     vs = tuple(coulomb_velocities) if "coulomb" in kinds else (0.0,)
     v0 = COULOMB_START if COULOMB_START in vs else vs[len(vs) // 2]
+    arm_opts = tuple(dict.fromkeys(bool(a) for a in armature))
+    arm0 = arm_opts[-1]
+    n = robot.n
     rows = []
-    best = None
     cache = {}
 
-    def run(fc, vel, v_s, weights):
+    def run(fc, vel, v_s, weights, arm):
         prep, LY, PY, th, memo = cache[(fc, vel)]
-        A = filtered_rows(robot, prep, kinds, v_s, arm_rows=LY, memo=memo)[th]
-        P = np.concatenate([PY, friction_columns(prep.predict[1][th], kinds, v_s)], axis=2)
+        ks = tuple(kinds) + (("armature",) if arm else ())
+        cols = kept_columns(ks, n, merged)
+        A = filtered_rows(robot, prep, ks, v_s, arm_rows=LY, memo=memo, columns=cols)[th]
+        qp, qdp, qddp = (X[th] for X in prep.predict)
+        P = np.concatenate([PY, joint_columns(qdp, qddp, ks, v_s)[:, :, cols]], axis=2)
         train = (prep.usable & (prep.t <= t_split))[th]
         res = cv_scores(A, prep.tau[th], P, prep.tau_raw[th], prep.t[th], train, fc, weights, folds)
         out = []
         for w in weights:
             row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
-                   "rms": [float(r) for r in res[w]], "score": _score(res[w])}
+                   "armature": bool(arm), "rms": [float(r) for r in res[w]], "score": _score(res[w])}
             rows.append(row)
             out.append(row)
         return out
 
-    multi = len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
+    multi = TWO_STAGE and len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
+
+    def pick(cands):
+        """The candidate of the rule (:data:`RULE`) among ``cands``, each judged against every row scored."""
+        ok = [r for r in cands if np.isfinite(r["score"])]
+        if not ok:
+            return None
+        if RULE == "geometric-mean":
+            return min(ok, key=lambda r: r["score"])
+        ref = np.min([r["rms"] for r in rows if np.isfinite(r["score"])], axis=0)
+        return min(ok, key=lambda r: (round(float(np.max(np.asarray(r["rms"]) / ref)), 12), r["score"]))
+
     for vel in velocities:
         for fc in cutoffs:
             prep = _flt.prepare(log, fc, vel, grids=g, coarse_factor=CV_COARSE_FACTOR)
@@ -259,32 +308,43 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
             th = slice(None, None, max(1, int(np.floor(prep.fs_coarse / (CV_RATE_FACTOR * fc)))))
             qp, qdp, qddp = (X[th] for X in prep.predict)
             PY = np.asarray(robot.regressor(qp, qdp, qdp, qddp), dtype=float)
-            cache = {(fc, vel): (prep, LY, PY, th, {})}
-            stage1 = vs if not multi else (v0,)
-            for v_s in stage1:
-                for row in run(fc, vel, v_s, weightings):
-                    if best is None or row["score"] < best[0]["score"]:
-                        best = (row, cache[(fc, vel)])
-    if best is None or not np.isfinite(best[0]["score"]):
+            cache[(fc, vel)] = (prep, LY, PY, th, {})
+            for v_s in (vs if not multi else (v0,)):
+                run(fc, vel, v_s, weightings, arm0)
+    top = pick(rows)
+    if top is None:
         raise ConfigError(f"log {log.source}: too short to cross-validate the filter ({folds} blocks of the "
                           "training part); give a longer log or --filter, --velocities, --weighting")
+    fc, vel = top["cutoff_hz"], top["velocities"]
+    cache = {(fc, vel): cache[(fc, vel)]}
     if multi:
-        fc, vel = best[0]["cutoff_hz"], best[0]["velocities"]
-        cache = {(fc, vel): best[1]}
         for v_s in vs:
             if v_s != v0:
-                for row in run(fc, vel, v_s, weightings):
-                    if row["score"] < best[0]["score"]:
-                        best = (row, best[1])
-    chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "score")}
+                run(fc, vel, v_s, weightings, arm0)
+        top = pick([r for r in rows if r["cutoff_hz"] == fc and r["velocities"] == vel])
+    best = (top, None)
+    for arm in arm_opts:
+        if arm != arm0:
+            other = min(run(fc, vel, top["coulomb_velocity"], weightings, arm), key=lambda r: r["score"])
+            with_arm, without = (other, top) if arm else (top, other)
+            best = (with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without, None)
+    chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature",
+                                      "score")}
     lo = min(float(r["score"]) for r in rows)
+    stages = ("stage 1: every cut-off x velocity source x weighting at v_s = "
+              f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source" if multi
+              else "every candidate setting") + (
+        "; chosen: the lowest worst ratio over the joints of the setting's RMS to the joint's best over every "
+        "setting (ties: geometric mean)" if RULE == "worst-ratio" else "; chosen: the lowest geometric mean")
+    if len(arm_opts) > 1:
+        stages += (f" (with{'' if arm0 else 'out'} a rotor inertia per joint), then every weighting "
+                   f"with{'out' if arm0 else ''} it at the chosen settings; the rotor inertias are kept only "
+                   f"when they lower the best score by more than {100 * ARMATURE_GAIN:g} %")
     return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
-            "stage1_coulomb_velocity": float(v0) if multi else None,
+            "stage1_coulomb_velocity": float(v0) if multi else None, "rule": RULE,
             "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
                        "logged torques predicted (states low-passed at the cut-off) by the parallel-filtered fit "
                        f"on the other blocks, less a guard of {GUARD:g} / f_c s at each side of the block; "
-                       + ("stage 1: every cut-off x velocity source x weighting at v_s = "
-                          f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source"
-                          if multi else "every candidate setting")),
+                       + stages),
             "score": "geometric mean over joints of the per-joint held-out RMS pooled over the blocks [N m]; "
-                     "lowest wins"}
+                     "the choice follows rule"}
