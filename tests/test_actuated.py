@@ -274,6 +274,24 @@ def test_bounds_with_actuator_give_an_actuated_model_and_plants_in_the_full_elli
     assert nom.true_plant.effect("friction") is None and not np.any(nom.true_plant.rigid.joint)
 
 
+def test_a_plant_without_friction_outside_the_bounds_joint_part_is_said(bounds_file):
+    """The nominal plant (joint coefficients 0) against a centre 0 lies outside of (half-widths 5 % of the joint
+    coefficients, ``_bounds(jrel=0.05)``: |theta0_j| / sqrt((P^-1)_jj) about 4 for every joint coefficient): the
+    run's warnings say so once, naming the coefficient farthest in units of its half-width; with the fixture's
+    30 % half-widths (0 inside every one, ratio about 0.7) there is no such warning."""
+    nom = rc3r.build_run(controller="robust", bounds="hand.toml", plant="nominal", perturbed=True, duration=0.1)
+    assert not [w for w in nom.warnings if "no joint friction" in w], nom.warnings
+    arm = load_robot("rr3")
+    joint0 = np.concatenate([np.full(3, 2.0), np.full(3, 3.0), np.full(3, 0.5)])
+    bd = bounds_file["bf"] = _bounds(arm, KINDS[:3], joint0, jrel=0.05)
+    act = bd["actuator"]
+    ratio = np.abs(act["theta0"][arm.p:]) / np.sqrt(np.diag(np.linalg.inv(act["P"]))[arm.p:])
+    far = act["coefficient_names"][arm.p + int(np.argmax(ratio))]
+    spec = rc3r.build_run(controller="robust", bounds="hand.toml", plant="nominal", perturbed=True, duration=0.1)
+    said = [w for w in spec.warnings if "no joint friction" in w]
+    assert len(said) == 1 and f"{far} = " in said[0] and "--plant centre" in said[0], spec.warnings
+
+
 @pytest.mark.parametrize("law", ["robust", "fbl"])
 def test_friction_in_the_model_tracks_a_friction_plant_better(bounds_file, law):
     """The same plant (plant ``random:3`` of the bounds: rigid body + viscous, Coulomb, offset friction), the

@@ -352,8 +352,10 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     model_robot = actuated_model(nominal, act) if act else nominal  # friction, armature: docs/control.md
     the_plant = ((_actuated_bounds_plant if act else _bounds_plant)(nominal, bounds_file, spec)
                  if bounds_path is not None and _drawn(spec) else _plant(nominal, box_bounds, spec, seed))
+    joint_note = None
     if act and the_plant.p != model_robot.p:  # a plant of the rigid body alone: no joint coefficients
         the_plant = model_robot.with_rigid(the_plant).with_joint(None)
+        joint_note = _joint_outside(act)
     if bounds_path is not None:
         perturbed = file_model
         model = _file_model(LAWS[kind], dict(bounds_file, **(act or {})), nominal) if perturbed else \
@@ -368,7 +370,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         act = True
     traj_cfg = dict(cfg.get("trajectory", {}))
     traj = trajectory_from_config(traj_cfg, nominal.default_trajectory())
-    warnings = []
+    warnings = [] if joint_note is None else [joint_note]
     if traj_cfg.get("kind", "paper") in ("paper", "default"):  # the robot's default trajectory is used
         warnings += nominal.default_trajectory_warnings()
     if traj.n != the_plant.n:
@@ -425,6 +427,23 @@ def _tolerance(tol) -> float | None:
     if not (np.isfinite(tol) and tol > 0):
         raise ParameterError(f"tolerance must be finite and > 0 rad, got {tol!r}")
     return float(tol)
+
+
+def _joint_outside(act: dict) -> str | None:
+    """A warning when a plant without joint friction lies outside a bounds file's joint coefficients.
+
+    The plant (the rigid body alone) has every joint coefficient 0; ``act`` is ``load_bounds``'s
+    ``"actuator"`` part. Returns None when 0 is inside every joint coefficient's half-width ``rho_i``.
+    """
+    p = int(act["rigid_p"])
+    th, ri = np.asarray(act["theta0"], float)[p:], np.asarray(act["rho_i"], float)[p:]
+    ratio = np.abs(th) / np.maximum(ri, 1e-300)
+    k = int(np.argmax(ratio))
+    if ratio[k] <= 1.0:
+        return None
+    name = list(act["coefficient_names"])[p + k]
+    return (f"the plant has no joint friction but the bounds' centre has: {name} = {th[k]:.3g} is {ratio[k]:.3g} "
+            f"rho_i from 0, so the law compensates friction this plant lacks (--plant centre runs the identified arm)")
 
 
 def _check_bounds_robot(bf: dict, robot: str | None, urdf) -> None:
