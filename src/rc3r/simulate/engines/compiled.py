@@ -37,7 +37,7 @@ from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, t
 from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
 from rc3r.simulate.engines._jacobian import work as _tangent_work
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
-from rc3r.simulate.engines._sdirk import BHAT as _SDIRK3_BHAT, NEWTON_MAX as _NEWTON_MAX, NEWTON_TOL as _NEWTON_TOL, SG as _SG, SLOPE_GUARD as _SLOPE_GUARD, TABLE as _SDIRK3, error_norm as _error_norm, factor as _factor, slope_ratio as _slope_ratio  # noqa: E501
+from rc3r.simulate.engines._sdirk import BHAT as _SDIRK3_BHAT, NEWTON_MAX as _NEWTON_MAX, NEWTON_TOL as _NEWTON_TOL, SG as _SG, SLOPE_GUARD as _SLOPE_GUARD, KNEE_FLOOR as _KNEE_FLOOR, MI_REUSE as _MI_REUSE, TABLE as _SDIRK3, error_norm as _error_norm, factor as _factor, slope_ratio as _slope_ratio  # noqa: E501
 from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
 from rc3r.simulate.methods import ODE23S, RK4_PERIODS, RODAS, RODAS_PERIODS, ROS4, ROS4_PERIODS  # one source
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
@@ -440,32 +440,46 @@ def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a
 
 
 @njit(**dict(_JIT, inline="always"))
-def _slopes(fx, qd, d):
-    """``d`` (n,) = the effects' damping ``-d tau / d qd`` per joint at ``qd`` (each effect's ``slope_kernel``:
-    friction's ``F_v + F_c / v_s sech^2(qd / v_s)``)."""
+def _slopes(fx, qd, d, floor):
+    """``d`` (n,): the effects' damping ``-d tau / d qd`` per joint at ``qd``, plus ``floor`` times that at 0."""
     for j in range(qd.shape[0]):
-        d[j] = _damping(fx, qd.shape[0], j, qd[j])
+        d[j] = _damping(fx, qd.shape[0], j, qd[j]) + (floor * _damping(fx, qd.shape[0], j, 0.0) if floor else 0.0)
+
+
+@njit(**dict(_JIT, inline="always"))
+def _inverse_mass(x, ua, kc, wk, fx, fric, f, tau, col, Mi):
+    """``Mi`` = M(q)^-1 at ``x``: column j is fd(tau(x) + e_j) - ``f`` (f at x; fd affine in tau). False if not PD."""
+    n = Mi.shape[0]
+    _joint_torque(fx, fric, x[n:2 * n], ua, tau)
+    for j in range(n):
+        s_ = max(1.0, abs(tau[j]))
+        tau[j] += s_
+        ok = _fd(kc, x[0:n], x[n:2 * n], tau, col, wk)
+        tau[j] -= s_
+        if not ok:
+            return False
+        for i in range(n):
+            Mi[i, j] = (col[i] - f[n + i]) / s_
+    return True
 
 
 @njit(**_JIT)
 def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, atol, budget, knee=True):
     """Advance the plant ``x = (q, qd)`` (2n,) in place over one period ``Ts`` under the held torque ``ua`` by
     adaptive steps of Alexander's SDIRK3 (:data:`._sdirk.TABLE`), each stage solved by Newton's method on the
-    friction: the Newton matrix is ``[[I, -h g I], [0, I + h g M0^-1 phi'(qd)]]`` with the friction's slope
-    ``phi'`` at the current iterate (so the smooth Coulomb knee, nonlinear at the scale v_s, is solved, not
-    linearized) and ``M0^-1`` the inverse mass matrix at the period's start, by ``n`` forward dynamics (the
-    forward dynamics is affine in the torque: ``M^-1 e_j = fd(tau0 + e_j) - fd(tau0)``; M moves by a part in
-    1e3 over a 1 ms period, which slows the iteration by that factor). The rigid body's
-    own slopes (gravity, Coriolis) are left out of it: they slow the iteration by a factor ~ (h g)^2 |dqdd/dq|,
-    not by the damping. So a period costs ``n + 1`` right-hand sides plus one per Newton iteration (about two
-    per stage), whatever the friction's stiffness. A stage has converged when Newton's update is below
-    :data:`._sdirk.NEWTON_TOL` (1e-3 without ``knee``) of the tolerances' scale (that scale never under 1e-12
-    (1 + |x|), so tolerances below rounding end in the step budget, not in a stall); it is rejected after
-    :data:`._sdirk.NEWTON_MAX` iterations. The error estimate (embedded order 2) is filtered by the Newton
-    matrix (:func:`._sdirk.error_norm`); ``knee`` (the default) filters its velocities over the rest of the
-    period and refuses a step across the friction's knee (:data:`._sdirk.SLOPE_GUARD`), module docstring of
-    :mod:`._sdirk`. ``hs[0]``: the step to try, carried from period to period. ``V`` (12, 2n), ``Mi``, ``N``
-    (n, n), ``piv`` (n,): scratch. At most ``budget`` steps. Returns ``(status, n_f)``."""
+    friction: Newton's matrix is ``[[I, -h g I], [0, I + h g M0^-1 phi'(qd)]]``, ``phi'`` the friction's slope
+    at the iterate (the smooth Coulomb knee is solved, not linearized), ``M0^-1`` the inverse mass matrix at
+    the period's start (:func:`_inverse_mass`, n forward dynamics; kept :data:`._sdirk.MI_REUSE` periods with
+    ``knee`` if ``hs`` has a second entry); the rigid body's own slopes are left out (they slow the iteration
+    by ~ (h g)^2 |dqdd/dq|, not by the damping). A period costs ``n + 1`` right-hand sides plus one per Newton
+    iteration, whatever the friction's stiffness. A stage has converged when Newton's update is below
+    :data:`._sdirk.NEWTON_TOL` (1e-3 without ``knee``) of the tolerances' scale (never under 1e-12 (1 + |x|)),
+    rejected after :data:`._sdirk.NEWTON_MAX` iterations. The embedded estimate is filtered by Newton's matrix
+    (:func:`._sdirk.error_norm`); ``knee`` (the default) filters its velocities over the rest of the
+    period (forgiving at most :data:`._sdirk.FORGIVE` times the step's own) and refuses a step across the
+    friction's knee: :mod:`._sdirk`.
+    ``hs[0]``: the step to try, carried between periods (``hs[1]``: the periods left on ``Mi``). ``V`` (12,
+    2n), ``Mi``, ``N`` (n, n), ``piv`` (n,): scratch. At most ``budget`` steps. Returns ``(status, n_f)``."""
     n2 = x.shape[0]
     n = n2 // 2
     F0, Y, base, Fs, err, xnew = V[0], V[1], V[2], V[3:6], V[6], V[7]
@@ -475,18 +489,12 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
     nf, steps, t = 1, 0, 0.0
     g = _SG
     ntol = _NEWTON_TOL if knee else 1e-3
-    # M0^-1 by columns: the joint torque of x plus a unit torque on joint j, less F0 (fd is affine in tau)
-    _joint_torque(fx, fric, x[n:n2], ua, tau)
-    for j in range(n):
-        s_ = max(1.0, abs(tau[j]))
-        tau[j] += s_
-        ok = _fd(kc, x[0:n], x[n:n2], tau, col, wk)
-        tau[j] -= s_
-        if not ok:
-            return NOTPD, nf
-        for i in range(n):
-            Mi[i, j] = (col[i] - F0[n + i]) / s_
-    nf += n
+    fresh = not knee or hs.shape[0] < 2 or hs[1] <= 0.0  # M0^-1 kept _MI_REUSE periods (hs[1]: periods left)
+    if fresh and not _inverse_mass(x, ua, kc, wk, fx, fric, F0, tau, col, Mi):
+        return NOTPD, nf
+    nf += n if fresh else 0
+    if hs.shape[0] > 1:
+        hs[1] = (_MI_REUSE if fresh else hs[1]) - 1.0
     while t < Ts * (1.0 - 1e-12):
         h = min(hs[0], Ts - t)
         cut = h < hs[0]
@@ -509,7 +517,7 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                         good = False
                         break
                     nf += 1
-                    _slopes(fx, Y[n:n2], d1)
+                    _slopes(fx, Y[n:n2], d1, 0.0)
                     if not _factor(Mi, d1, hg, N, piv):
                         good = False
                         break
@@ -532,6 +540,14 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                     break
                 for i in range(n2):  # the stage's slope from the solved equation (exact at convergence)
                     Fs[st, i] = (Y[i] - base[i]) / hg
+            if not good and not fresh:  # a kept M0^-1 may be what failed: refresh it here, retry the step
+                fresh = _plant_rhs(x, ua, kc, wk, fx, fric, err, tau) and _inverse_mass(x, ua, kc, wk, fx, fric, err,
+                                                                                         tau, col, Mi)
+                nf += n + 1
+                if not fresh:
+                    return NOTPD, nf
+                steps -= 1
+                continue
             e = 1e300
             if good:
                 for i in range(n2):
@@ -540,10 +556,11 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                     for j in range(3):
                         acc += (_SDIRK3[2, 1 + j] - _SDIRK3_BHAT[j]) * Fs[j, i]
                     err[i] = h * acc
-                _slopes(fx, xnew[n:n2], d1)
+                _slopes(fx, xnew[n:n2], d1, 0.0)
                 e = _error_norm(err, x, xnew, Mi, d1, hg, max(hg, Ts - t - h) if knee else hg, N, piv, col, rtol, atol)
                 if knee and e <= 1.0:
-                    _slopes(fx, x[n:n2], d0)
+                    _slopes(fx, x[n:n2], d0, _KNEE_FLOOR)
+                    _slopes(fx, xnew[n:n2], d1, _KNEE_FLOOR)
                     if _slope_ratio(d0, d1) > _SLOPE_GUARD:
                         e = 2.0  # across the knee: halve the step (the estimate misjudges it)
             if not (e <= 1e300):
@@ -655,7 +672,7 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     nd = ubuf.shape[0]  # delay + 1
     h = Ts / nsub
     V = np.empty((13, n2)); J = np.empty((n2, n2)); W = np.empty((n2, n2)); piv = np.zeros(n2, dtype=np.int64)
-    hs = np.full(1, Ts); ys = np.empty(1)
+    hs = np.array([Ts, 0.0]); ys = np.empty(1)  # the step to try; periods left on the SDIRK3's M0^-1
     Mi = np.empty((nj, nj)); Nw = np.empty((nj, nj)); pivn = np.zeros(nj, dtype=np.int64)
     xp = x[0:n2]  # the plant's part of x, advanced in place
     nrhs = 0
