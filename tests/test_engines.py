@@ -437,6 +437,41 @@ def test_coulomb_rotor_periods_satisfy_the_closed_form(tmp_path):
     assert np.abs(res.qd[1:, 0] - want).max() <= 1e-5, np.abs(res.qd[1:, 0] - want).max()
 
 
+def test_sdirk_knee_control_costs_less_than_the_step_filter_on_the_coulomb_rotor(tmp_path):
+    """The knee's error control (``_sdirk_period(..., knee=True)``, the default) against the control before
+    it (``knee=False``) on every period of the sticking and slipping Coulomb rotor of
+    :func:`test_coulomb_rotor_periods_satisfy_the_closed_form`, each period integrated alone from the run's
+    state under its held torque: fewer right-hand sides in all (bound 0.8 of the old count; measured
+    MEASURED), and every end speed still within 1e-5 rad/s of the closed form (:func:`_coulomb_period`)."""
+    from rc3r.simulate._fast import simulator
+
+    path = tmp_path / "coulomb.urdf"
+    path.write_text(_ONE_JOINT.replace('damping="10" friction="0"', 'damping="0" friction="0.005"'))
+    spec = rc3r.build_run(urdf=str(path), controller="fbl", rate=500.0, duration=2.0, friction="urdf",
+                          engine="fast")
+    P = spec.true_plant
+    res = simulate(P, spec.law, spec.trajectory, spec.options, x0=[0.1, 5.0])
+    eng = simulator(P.rigid)
+    mod = eng.instance
+    kc, fx = eng.constants(P.rigid), P.pack()
+    wk, fric, T = mod._make_work(kc), mod._friction(fx, 1), 1.0 / 500.0
+    cost, ends = {}, {}
+    for knee in (True, False):
+        hs, V = np.array([T, 0.0]), np.empty((13, 2))
+        Mi, N, piv, tau = np.empty((1, 1)), np.empty((1, 1)), np.zeros(1, dtype=np.int64), np.empty(1)
+        cost[knee], ends[knee] = 0, []
+        for k in range(len(res.t) - 1):
+            x = np.array([res.q[k, 0], res.qd[k, 0]])
+            st, nf = mod._sdirk_period(x, res.u[k].copy(), T, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, 1e-4, 1e-6,
+                                       10000, knee)
+            assert st == 0
+            cost[knee] += nf
+            ends[knee].append(x[1])
+    want = _coulomb_period(res.qd[:-1, 0], res.u[:-1, 0], 0.005, 0.01, 1e-4, T)
+    assert np.abs(np.array(ends[True]) - want).max() <= 1e-5
+    assert cost[True] <= 0.8 * cost[False], cost
+
+
 def test_one_joint_arm_regressors_equal_rnea(tmp_path, rng):
     """A one-joint arm (Pinocchio returns its joint Jacobian and its torque regressor as vectors, not
     (6, 1) and (1, 10) matrices): both regressors of the robot, the compiled kernel's and the
