@@ -5,7 +5,8 @@
 Runs the robust law on the arm (example-robot-data URDF, its friction and effort limits, a 0-3 kg payload,
 the perturbed plant) with the default sampled method, then re-integrates every recorded period alone from
 the run's state under its held torque, with each compiled period method, and with ROS4 at rtol 1e-10,
-atol 1e-12 as the yardstick. Prints per method: right-hand sides per period (mean, max), wall time per
+atol 1e-12 as the yardstick (``sdirk``: SDIRK3 periods with the knee's error control, the default; ``sdirk0``: the
+same periods with the error control before it, :mod:`rc3r.simulate.engines._sdirk`). Prints per method: right-hand sides per period (mean, max), wall time per
 period (all periods in one timed loop), and the largest distance of the period's end state from the
 yardstick's (q [rad], qd [rad/s]). The yardstick is a local one (each period starts from the same state),
 so the numbers are the methods' own errors, not the closed loop's amplification of them.
@@ -69,7 +70,7 @@ def main(argv=None) -> int:
         Uh = res.u[:-1]
 
         def sweep(kind, rtol, atol, reuse=1):
-            hs = np.full(1, Ts)
+            hs = np.array([Ts, 0.0])  # the step to try, the periods left on SDIRK3's M^-1 (as the engine)
             out = np.empty_like(X0); nfs = np.empty(len(X0), dtype=np.int64)
             t0 = time.perf_counter()
             for k in range(len(X0)):
@@ -77,9 +78,9 @@ def main(argv=None) -> int:
                 if kind == "ros4":
                     st, nf = mod._stiff_period(x, Uh[k].copy(), Ts, hs, kc, wk, fx, fric, code, cp, tp, ref, Y, xi, v,
                                                a, r, tau, ys, V, J, W, piv, rtol, atol, 100000, tw)
-                elif kind == "sdirk":
+                elif kind in ("sdirk", "sdirk0"):  # sdirk0: the error control before issue 37's knee work
                     st, nf = mod._sdirk_period(x, Uh[k].copy(), Ts, hs, kc, wk, fx, fric, tau, V, Mi, Nw, pivn, rtol,
-                                               atol, 100000)
+                                               atol, 100000, kind == "sdirk")
                 else:
                     st, nf = mod._rodas_period(x, Uh[k].copy(), Ts, hs, kc, wk, fx, fric, code, cp, tp, ref, Y, xi, v,
                                                a, r, tau, ys, V, J, W, piv, rtol, atol, 100000, tw, reuse)
@@ -87,18 +88,18 @@ def main(argv=None) -> int:
                 out[k] = x; nfs[k] = nf
             return out, nfs, (time.perf_counter() - t0) / len(X0) * 1e6
 
-        sweep("ros4", 1e-4, 1e-6); sweep("rodas", 1e-4, 1e-6); sweep("sdirk", 1e-4, 1e-6)  # compile
+        for kind in ("ros4", "rodas", "sdirk", "sdirk0"):  # compile
+            sweep(kind, 1e-4, 1e-6)
         yard, _, _ = sweep("ros4", 1e-10, 1e-12)
-        for name, kind, rt, at, reuse in (("ros4 1e-4/1e-6 (today)", "ros4", 1e-4, 1e-6, 1),
-                                          ("rodas 1e-4/1e-6", "rodas", 1e-4, 1e-6, 1),
-
-
-                                          ("rodas 1e-6/1e-8", "rodas", 1e-6, 1e-8, 1),
-                                          ("sdirk 1e-4/1e-6", "sdirk", 1e-4, 1e-6, 1),
-                                          ("sdirk 1e-6/1e-8", "sdirk", 1e-6, 1e-8, 1)):
+        rows = [("ros4 1e-4/1e-6", "ros4", 1e-4, 1e-6, 1), ("rodas 1e-4/1e-6", "rodas", 1e-4, 1e-6, 1),
+                ("rodas 1e-6/1e-8", "rodas", 1e-6, 1e-8, 1)]
+        rows += [(f"{k} {rt:g}/{at:g}", k, rt, at, 1) for k in ("sdirk0", "sdirk")
+                 for rt, at in ((1e-4, 1e-6), (3e-4, 3e-6), (1e-6, 1e-8))]
+        for name, kind, rt, at, reuse in rows:
             out, nfs, us = sweep(kind, rt, at, reuse)
             dq = np.abs(out[:, :n] - yard[:, :n]).max(); dqd = np.abs(out[:, n:] - yard[:, n:]).max()
-            print(f"| {arm} | {name} | {nfs.mean():.1f} | {nfs.max()} | {us:.1f} | {dq:.2g} | {dqd:.2g} |", flush=True)
+            print(f"| {arm} | {name} | {nfs.mean():.1f} | {nfs.max()} | {us:.1f} | {dq:.2g} | {dqd:.2g} |",
+                  flush=True)
         if args.closed_loop:
             from dataclasses import replace
             o = spec.options

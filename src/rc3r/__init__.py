@@ -98,6 +98,7 @@ Module map (one concept each; ``docs/architecture.md`` has the same map with mor
 ``rc3r.simulate.engines._jacobian``    the closed loop's analytic Jacobian by the chain rule (kernel-independent)
 ``rc3r.simulate.engines._dispatch``    the engine's dispatch over the laws, written from ``LAWS`` at instantiation
 ``rc3r.simulate.engines._tableaux``    the ROS4 and RODAS tables of those integrators (plain constants)
+``rc3r.simulate.engines._sdirk``       the SDIRK3 periods' table, Newton matrix and knee error control (kernel-independent)
 ``rc3r.simulate._python``              the ``python`` and ``reference`` engines (any robot, any law)
 ``rc3r.simulate.metrics``              scalar metrics of a run
 ``rc3r.simulate.verdict``              what a run means: clean, chattering, saturated, limit-violated, diverged

@@ -37,6 +37,7 @@ from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, t
 from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
 from rc3r.simulate.engines._jacobian import work as _tangent_work
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
+from rc3r.simulate.engines._sdirk import BHAT as _SDIRK3_BHAT, NEWTON_MAX as _NEWTON_MAX, NEWTON_TOL as _NEWTON_TOL, SG as _SG, SLOPE_GUARD as _SLOPE_GUARD, KNEE_FLOOR as _KNEE_FLOOR, MI_REUSE as _MI_REUSE, TABLE as _SDIRK3, error_norm as _error_norm, factor as _factor, slope_ratio as _slope_ratio  # noqa: E501
 from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
 from rc3r.simulate.methods import ODE23S, RK4_PERIODS, RODAS, RODAS_PERIODS, ROS4, ROS4_PERIODS  # one source
 from rc3r.simulate.status import HMIN, NOTPD, OK, WORK, check
@@ -438,72 +439,62 @@ def _stiff_period(x, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a
     return OK, nf
 
 
-#: Alexander's SDIRK3 (SIAM J. Numer. Anal. 14 (1977); Hairer & Wanner II, IV.6, Table 6.5): L-stable and
-#: stiffly accurate, order 3 in 3 implicit stages of diagonal gamma; the embedded order-2 weights (b^_3 = 0)
-#: use the first two stages. Rows: (c_i, a_i1, a_i2, a_i3); the last row is b (the third stage).
-_SG = 0.4358665215084590
-_SDIRK3 = np.array([
-    [_SG, _SG, 0.0, 0.0],
-    [(1.0 + _SG) / 2.0, (1.0 - _SG) / 2.0, _SG, 0.0],
-    [1.0, -(6.0 * _SG * _SG - 16.0 * _SG + 1.0) / 4.0, (6.0 * _SG * _SG - 20.0 * _SG + 5.0) / 4.0, _SG]])
-_SDIRK3_BHAT = np.array([1.0 - (1.0 - 2.0 * _SG) / (1.0 - _SG), (1.0 - 2.0 * _SG) / (1.0 - _SG), 0.0])
-#: Newton iterations of one SDIRK stage before the step is rejected and halved (:func:`_sdirk_period`).
-_NEWTON_MAX = 10
+@njit(**dict(_JIT, inline="always"))
+def _slopes(fx, qd, d, floor):
+    """``d`` (n,): the effects' damping ``-d tau / d qd`` per joint at ``qd``, plus ``floor`` times that at 0."""
+    for j in range(qd.shape[0]):
+        d[j] = _damping(fx, qd.shape[0], j, qd[j]) + (floor * _damping(fx, qd.shape[0], j, 0.0) if floor else 0.0)
 
 
 @njit(**dict(_JIT, inline="always"))
-def _newton_matrix(fx, qd, hg, Mi, N, piv):
-    """``N = I + hg M0^-1 diag(phi'(qd))`` (n, n), LU-factored in place: the friction block of the SDIRK
-    stage's Newton matrix (``phi'`` the effects' damping ``-d tau / d qd`` at ``qd``, each effect's
-    ``slope_kernel``: friction's ``F_v + F_c / v_s sech^2(qd / v_s)``; ``Mi`` = M^-1 at the step's start).
-    False if singular."""
-    n = qd.shape[0]
+def _inverse_mass(x, ua, kc, wk, fx, fric, f, tau, col, Mi):
+    """``Mi`` = M(q)^-1 at ``x``: column j is fd(tau(x) + e_j) - ``f`` (f at x; fd affine in tau). False if not PD."""
+    n = Mi.shape[0]
+    _joint_torque(fx, fric, x[n:2 * n], ua, tau)
     for j in range(n):
-        d = hg * _damping(fx, n, j, qd[j])
+        s_ = max(1.0, abs(tau[j]))
+        tau[j] += s_
+        ok = _fd(kc, x[0:n], x[n:2 * n], tau, col, wk)
+        tau[j] -= s_
+        if not ok:
+            return False
         for i in range(n):
-            N[i, j] = Mi[i, j] * d + (1.0 if i == j else 0.0)
-    return _lu_factor(N, piv)
+            Mi[i, j] = (col[i] - f[n + i]) / s_
+    return True
 
 
 @njit(**_JIT)
-def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, atol, budget):
+def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, atol, budget, knee=True):
     """Advance the plant ``x = (q, qd)`` (2n,) in place over one period ``Ts`` under the held torque ``ua`` by
-    adaptive steps of Alexander's SDIRK3 (:data:`_SDIRK3`), each stage solved by Newton's method on the
-    friction: the Newton matrix is ``[[I, -h g I], [0, I + h g M0^-1 phi'(qd)]]`` with the friction's slope
-    ``phi'`` at the current iterate (so the smooth Coulomb knee, nonlinear at the scale v_s, is solved, not
-    linearized) and ``M0^-1`` the inverse mass matrix at the period's start, by ``n`` forward dynamics (the
-    forward dynamics is affine in the torque: ``M^-1 e_j = fd(tau0 + e_j) - fd(tau0)``; M moves by a part in
-    1e3 over a 1 ms period, which slows the iteration by that factor). The rigid body's
-    own slopes (gravity, Coriolis) are left out of it: they slow the iteration by a factor ~ (h g)^2 |dqdd/dq|,
-    not by the damping. So a period costs ``n + 1`` right-hand sides plus one per Newton iteration (about two
-    per stage), whatever the friction's stiffness. A stage has converged when Newton's update is below 1e-3
-    of the tolerances' scale (that scale never under 1e-12 (1 + |x|), so tolerances below rounding end in
-    the step budget, not in a stall); it is rejected after :data:`_NEWTON_MAX` iterations. The error
-    estimate (embedded order 2) is filtered by the Newton matrix, as RADAU5's
-    (Hairer & Wanner IV.8), so a damped transient does not count as error. ``hs[0]``: the step to try, carried
-    from period to period. ``V`` (10, 2n), ``Mi``, ``N`` (n, n), ``piv`` (n,): scratch. At most ``budget``
-    steps. Returns ``(status, n_f)``."""
+    adaptive steps of Alexander's SDIRK3 (:data:`._sdirk.TABLE`), each stage solved by Newton's method on the
+    friction: Newton's matrix is ``[[I, -h g I], [0, I + h g M0^-1 phi'(qd)]]``, ``phi'`` the friction's slope
+    at the iterate (the smooth Coulomb knee is solved, not linearized), ``M0^-1`` the inverse mass matrix at
+    the period's start (:func:`_inverse_mass`, n forward dynamics; kept :data:`._sdirk.MI_REUSE` periods with
+    ``knee`` if ``hs`` has a second entry); the rigid body's own slopes are left out (they slow the iteration
+    by ~ (h g)^2 |dqdd/dq|, not by the damping). A period costs ``n + 1`` right-hand sides plus one per Newton
+    iteration, whatever the friction's stiffness. A stage has converged when Newton's update is below
+    :data:`._sdirk.NEWTON_TOL` (1e-3 without ``knee``) of the tolerances' scale (never under 1e-12 (1 + |x|)),
+    rejected after :data:`._sdirk.NEWTON_MAX` iterations. The embedded estimate is filtered by Newton's matrix
+    (:func:`._sdirk.error_norm`); ``knee`` (the default) filters its velocities over the rest of the
+    period (forgiving at most :data:`._sdirk.FORGIVE` times the step's own) and refuses a step across the
+    friction's knee: :mod:`._sdirk`.
+    ``hs[0]``: the step to try, carried between periods (``hs[1]``: the periods left on ``Mi``). ``V`` (12,
+    2n), ``Mi``, ``N`` (n, n), ``piv`` (n,): scratch. At most ``budget`` steps. Returns ``(status, n_f)``."""
     n2 = x.shape[0]
     n = n2 // 2
     F0, Y, base, Fs, err, xnew = V[0], V[1], V[2], V[3:6], V[6], V[7]
-    col = V[8][0:n]
-    sc = V[9]
+    col, d0, d1 = V[8][0:n], V[10][0:n], V[11][0:n]
     if not _plant_rhs(x, ua, kc, wk, fx, fric, F0, tau):
         return NOTPD, 1
     nf, steps, t = 1, 0, 0.0
     g = _SG
-    # M0^-1 by columns: the joint torque of x plus a unit torque on joint j, less F0 (fd is affine in tau)
-    _joint_torque(fx, fric, x[n:n2], ua, tau)
-    for j in range(n):
-        s_ = max(1.0, abs(tau[j]))
-        tau[j] += s_
-        ok = _fd(kc, x[0:n], x[n:n2], tau, col, wk)
-        tau[j] -= s_
-        if not ok:
-            return NOTPD, nf
-        for i in range(n):
-            Mi[i, j] = (col[i] - F0[n + i]) / s_
-    nf += n
+    ntol = _NEWTON_TOL if knee else 1e-3
+    fresh = not knee or hs.shape[0] < 2 or hs[1] <= 0.0  # M0^-1 kept _MI_REUSE periods (hs[1]: periods left)
+    if fresh and not _inverse_mass(x, ua, kc, wk, fx, fric, F0, tau, col, Mi):
+        return NOTPD, nf
+    nf += n if fresh else 0
+    if hs.shape[0] > 1:
+        hs[1] = (_MI_REUSE if fresh else hs[1]) - 1.0
     while t < Ts * (1.0 - 1e-12):
         h = min(hs[0], Ts - t)
         cut = h < hs[0]
@@ -526,7 +517,8 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                         good = False
                         break
                     nf += 1
-                    if not _newton_matrix(fx, Y[n:n2], hg, Mi, N, piv):
+                    _slopes(fx, Y[n:n2], d1, 0.0)
+                    if not _factor(Mi, d1, hg, N, piv):
                         good = False
                         break
                     for i in range(n):  # residual R = Y - base - hg f(Y); dqd = -N^-1 R_qd, dq = -R_q + hg dqd
@@ -540,7 +532,7 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                         a0 = dq / (atol + rtol * abs(Y[i]) + 1e-12 * (1.0 + abs(Y[i])))  # never below rounding
                         a1 = col[i] / (atol + rtol * abs(Y[n + i]) + 1e-12 * (1.0 + abs(Y[n + i])))
                         dn += a0 * a0 + a1 * a1
-                    if math.sqrt(dn / n2) <= 1e-3:
+                    if math.sqrt(dn / n2) <= ntol:
                         conv = True
                         break
                 if not (good and conv):
@@ -548,6 +540,14 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                     break
                 for i in range(n2):  # the stage's slope from the solved equation (exact at convergence)
                     Fs[st, i] = (Y[i] - base[i]) / hg
+            if not good and not fresh:  # a kept M0^-1 may be what failed: refresh it here, retry the step
+                fresh = _plant_rhs(x, ua, kc, wk, fx, fric, err, tau) and _inverse_mass(x, ua, kc, wk, fx, fric, err,
+                                                                                         tau, col, Mi)
+                nf += n + 1
+                if not fresh:
+                    return NOTPD, nf
+                steps -= 1
+                continue
             e = 1e300
             if good:
                 for i in range(n2):
@@ -556,16 +556,13 @@ def _sdirk_period(x, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, N, piv, rtol, ato
                     for j in range(3):
                         acc += (_SDIRK3[2, 1 + j] - _SDIRK3_BHAT[j]) * Fs[j, i]
                     err[i] = h * acc
-                # filter by the Newton matrix at the new state: N de_qd = e_qd, de_q = e_q + hg de_qd
-                if _newton_matrix(fx, xnew[n:n2], hg, Mi, N, piv):
-                    _lu_solve(N, piv, err[n:n2])
-                    e = 0.0
-                    for i in range(n):
-                        err[i] += hg * err[n + i]
-                    for i in range(n2):
-                        sc[i] = err[i] / (atol + rtol * max(abs(x[i]), abs(xnew[i])))
-                        e += sc[i] * sc[i]
-                    e = math.sqrt(e / n2)
+                _slopes(fx, xnew[n:n2], d1, 0.0)
+                e = _error_norm(err, x, xnew, Mi, d1, hg, max(hg, Ts - t - h) if knee else hg, N, piv, col, rtol, atol)
+                if knee and e <= 1.0:
+                    _slopes(fx, x[n:n2], d0, _KNEE_FLOOR)
+                    _slopes(fx, xnew[n:n2], d1, _KNEE_FLOOR)
+                    if _slope_ratio(d0, d1) > _SLOPE_GUARD:
+                        e = 2.0  # across the knee: halve the step (the estimate misjudges it)
             if not (e <= 1e300):
                 e = 1e300
             if e <= 1.0:
@@ -675,7 +672,7 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
     nd = ubuf.shape[0]  # delay + 1
     h = Ts / nsub
     V = np.empty((13, n2)); J = np.empty((n2, n2)); W = np.empty((n2, n2)); piv = np.zeros(n2, dtype=np.int64)
-    hs = np.full(1, Ts); ys = np.empty(1)
+    hs = np.array([Ts, 0.0]); ys = np.empty(1)  # the step to try; periods left on the SDIRK3's M0^-1
     Mi = np.empty((nj, nj)); Nw = np.empty((nj, nj)); pivn = np.zeros(nj, dtype=np.int64)
     xp = x[0:n2]  # the plant's part of x, advanced in place
     nrhs = 0
@@ -713,7 +710,8 @@ def integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, law, cp, tp, lim,
                 st, m = _rodas_period(xp, ua, Ts, hs, kc, wk, fx, fric, law, cp, tp, ref, Y, xi, v, a, r, tau, ys, V,
                                       J, W, piv, rtol, atol, budget, tw, PERIOD_JAC_REUSE)
             else:
-                st, m = _sdirk_period(xp, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, Nw, pivn, rtol, atol, budget)
+                st, m = _sdirk_period(xp, ua, Ts, hs, kc, wk, fx, fric, tau, V, Mi, Nw, pivn, rtol, atol, budget,
+                                      _ON[0])
             nrhs += m
             if st != OK:
                 return st, stored, nrhs, s, t
