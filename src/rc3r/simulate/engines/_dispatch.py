@@ -28,11 +28,14 @@ from numba import njit
 
 from ..._numba_cache import _inside
 
-__all__ = ["MARKER", "law_source", "law_files", "compiled_laws", "signature"]
+__all__ = ["MARKER", "LAW_CODES", "law_source", "law_files", "compiled_laws", "signature"]
 
 #: The line of :mod:`.compiled` that each instantiation replaces with :func:`law_source`.
-MARKER = ("from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, "
-          "law_slopes, law_theta, uses_xi  # law dispatch")
+MARKER = ("from rc3r.simulate.engines._dispatch import LAW_CODES, inertia_gain, law_directions, law_jacobian, "
+          "law_signals, law_slopes, law_theta, uses_xi  # law dispatch")
+
+#: The law codes this dispatch has a branch for (none in the stubs; an instance's are its laws').
+LAW_CODES = ()
 
 _JIT = dict(cache=True, nogil=True)
 
@@ -99,6 +102,7 @@ def law_source(laws=None) -> str:
     parts = [
         "# ---- the law dispatch: written by rc3r.simulate.engines._dispatch from rc3r.controllers.LAWS ----",
         *imports,
+        f"LAW_CODES = {tuple(int(c.code) for c in laws)!r}",
         "from rc3r.simulate.engines._jacobian import finish as _finish, signal_columns as _signal_columns",
         "_LAW_INLINE = dict(cache=True, nogil=True, inline=\"always\")",
         "_LAW_JIT = dict(cache=True, nogil=True, error_model=\"numpy\")",

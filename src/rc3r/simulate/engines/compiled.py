@@ -34,7 +34,7 @@ from rc3r.plants._kernels import measure
 from rc3r.simulate.engines._effects import CODES as EFFECT_CODES, actuate, damping as _damping, effect_slopes as _effect_slopes, has_torque as _friction, joint_torque as _joint_torque  # noqa: F401 - effect dispatch
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, tangents_into as _tangents  # kernel supply (optional)
-from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
+from rc3r.simulate.engines._dispatch import LAW_CODES, inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
 from rc3r.simulate.engines._jacobian import work as _tangent_work
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
 from rc3r.simulate.engines._tableaux import RODAS as _RODAS, ROS4 as _ROS4
