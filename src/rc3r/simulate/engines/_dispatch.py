@@ -139,7 +139,7 @@ def law_source(laws=None) -> str:
         "",
         "",
         "@njit(**_LAW_JIT)\n" + branch(
-            "def law_jacobian(code, cp, es, x, u, Y, r, rows, tw, J, Ft):\n"
+            "def law_jacobian(code, cp, es, x, Y, r, rows, tw, J, Ft):\n"
             "    Ux, Xi, xs, bt = tw[5], tw[6], tw[9], tw[14]\n"
             "    n = Y.shape[0]\n"
             "    _signal_columns(Y, r, rows, tw)",
@@ -190,6 +190,6 @@ def law_directions(code, cp, Y, r, tw):
 
 
 @njit(**_JIT)
-def law_jacobian(code, cp, es, x, u, Y, r, rows, tw, J, Ft):
+def law_jacobian(code, cp, es, x, Y, r, rows, tw, J, Ft):
     """Stub (never instantiated): raises."""
     raise RuntimeError("the law dispatch is written at instantiation (rc3r.simulate._fast.instantiate)")

@@ -146,7 +146,7 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     for i in range(rows):
         _tangents(kc, tw[8][i], q, qd, v, a, tw[13][i], wk)
     _effect_slopes(fx, u, qd, tw[15])  # the plant effects' slopes at the delivered u and qd
-    return law_jacobian(law, cp, tw[15], x, u, Y, r, rows, tw, J, Ft)
+    return law_jacobian(law, cp, tw[15], x, Y, r, rows, tw, J, Ft)
 
 
 @njit(**_JIT)
