@@ -361,9 +361,8 @@ def plan(spec, laws=()) -> None:
     from ..controllers import LAWS
     from ..simulate import _fast
 
-    plant = spec.true_plant if spec.true_plant is not None else spec.true_rigid
     codes = [spec.law.code] + [LAWS[name].code for name in laws if name in LAWS]
-    _fast.plan(codes, _fast.effect_codes(plant.pack()) if hasattr(plant, "pack") else ())
+    _fast.plan(codes, _fast.effect_codes(spec.true_plant.pack()) if spec.true_plant is not None else ())
 
 
 def prepare(spec) -> bool:
