@@ -4,11 +4,15 @@ supply, run in chunks.
 **Instantiation.** A robot names its kernel supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`
 ``(module, kc)`` (contract: :mod:`.engines._template`). :func:`instantiate` writes the source of
 :mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module and its
-``# law dispatch`` line replaced by the dispatch over the registered laws (:mod:`.engines._dispatch`) into a
-cache directory keyed by :func:`rc3r._numba_cache.package_hash` (and, for a supply or a law module outside
-rc3r, its own source), atomically and only once (the first writer wins, so numba's stamp, the
-file's time and size, stays valid), and imports it: numba caches its functions on disk like any
-module's. Any edit of a numba module of the package makes a new directory, hence a fresh compile.
+``# law dispatch`` line replaced by the dispatch over a choice of laws (:mod:`.engines._dispatch`), beside
+the dispatch over a choice of plant effects (:mod:`.engines._effects`): a run takes those of its own law
+and plant (:meth:`CompiledSimulator.for_run`), a command that runs several laws those of its :func:`plan`
+(every branch is code numba compiles into every integrator: ``docs/performance.md``, "Compile time").
+Each choice is one file, named by a hash of its text (and, for a supply or a law or effect module outside
+rc3r, their sources), in a folder keyed by :func:`rc3r._numba_cache.package_hash`, written atomically
+and only once (the first writer wins, so numba's stamp, the file's time and size, stays valid), and
+imported: numba caches its functions on disk like any module's. Any edit of a numba module of the
+package makes a new folder, hence a fresh compile.
 The directory is ``$NUMBA_CACHE_DIR/rc3r_engines`` if that is set, else the user's cache
 (``$XDG_CACHE_HOME`` or ``~/.cache``)``/rc3r/engines``, else the temporary directory (never
 inside the package: :func:`rc3r._numba_cache.package_hash` reads every module there);

@@ -2,7 +2,8 @@ r"""The compiled engine's dispatch over the registered laws, written from :data:
 
 The integrators of :mod:`.compiled` call a law through seven functions of its integer ``code``. They are
 not written by hand: :func:`law_source` writes them from the registry when :func:`rc3r.simulate._fast.instantiate`
-instantiates the engine on a kernel supply, one branch per registered compiled law (its module's kernels,
+instantiates the engine on a kernel supply, one branch per compiled law of the instance (the run's, or a
+command's planned set; its module's kernels,
 :mod:`rc3r.controllers.base`) and none that falls through: a code no law has raises. The text replaces the
 line of :mod:`.compiled` marked ``# law dispatch`` (:data:`MARKER`); the instantiation's cache key counts
 that text, the package's numba modules (:func:`rc3r._numba_cache.package_hash`) and the source of any law
