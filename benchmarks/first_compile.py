@@ -24,16 +24,18 @@ from pathlib import Path
 
 RUN = ("import sys; from rc3r.cli import main; sys.exit(main(['run', '--robot', 'rr3', '--perturbed', "
        "'--controller', 'robust', '--engine', 'fast', '--duration', '1', '--out', sys.argv[1]]))")
+PAPER = "import sys; from rc3r.cli import main; sys.exit(main(['paper', '--out', sys.argv[1]]))"
+COMMANDS = {"run": RUN, "paper": PAPER}
 
 
-def once(tree: Path) -> tuple[float, float]:
+def once(tree: Path, command: str = "run") -> tuple[float, float]:
     """(wall s, user CPU s) of one cold first run on ``tree``'s sources."""
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=f"{tmp}/nc",
                    RC3R_CACHE_DIR=f"{tmp}/rc", RC3R_COLD_START="compile")
         before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime
         t0 = time.perf_counter()
-        done = subprocess.run([sys.executable, "-c", RUN, f"{tmp}/out"], env=env, capture_output=True, text=True)
+        done = subprocess.run([sys.executable, "-c", COMMANDS[command], f"{tmp}/out"], env=env, capture_output=True, text=True)
         wall = time.perf_counter() - t0
         if done.returncode != 0:
             raise SystemExit(f"first_compile: the run on {tree} failed: {done.stderr.strip().splitlines()[-1:]}")
@@ -45,11 +47,13 @@ def main(argv=None) -> int:
     ap.add_argument("before", type=Path, help="the tree before the change (its src/ is imported)")
     ap.add_argument("after", type=Path, help="the tree after the change")
     ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--command", choices=sorted(COMMANDS), default="run",
+                    help="run: one continuous robust run of the 3R (default); paper: rc3r paper")
     args = ap.parse_args(argv)
     got: dict = {"before": [], "after": []}
     for _ in range(args.repeat):
         for label in ("before", "after"):
-            wall, cpu = once(getattr(args, label).resolve())
+            wall, cpu = once(getattr(args, label).resolve(), args.command)
             got[label].append((wall, cpu))
             print(f"{label:6s} wall {wall:6.1f} s  user CPU {cpu:6.1f} s", flush=True)
     load = os.getloadavg()[0]

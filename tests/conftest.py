@@ -12,6 +12,20 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 # that unset this (tests/test_cold_start.py).
 os.environ["RC3R_COLD_START"] = "compile"
 
+
+def _plan_every_law_and_effect():
+    """The suite runs every law on many plants: one compiled instance of all registered laws and effects per
+    kernel supply (rc3r.simulate._fast.plan), not one per law and effect set as a single run takes
+    (tests/test_engine_instances.py tests that choice, with the plan lifted)."""
+    from rc3r.plants import EFFECTS
+    from rc3r.simulate import _fast
+    from rc3r.simulate.engines import _dispatch, _effects
+
+    _fast.plan([c.code for c in _dispatch.compiled_laws()], [c.code for c in _effects.compiled_effects(EFFECTS)])
+
+
+_plan_every_law_and_effect()
+
 #: One seed for the whole suite; change it to re-roll every random test.
 SEED = 20241122
 

@@ -67,7 +67,7 @@ def test_compile_policy_keeps_the_dispatcher(tmp_path, monkeypatch):
 def cold(monkeypatch):
     """The default policy, and every compiled integrator reported not built (numba's cache cold)."""
     monkeypatch.setenv("RC3R_COLD_START", "python")
-    monkeypatch.setattr(CompiledSimulator, "is_cached", lambda self, which=None: False)
+    monkeypatch.setattr(CompiledSimulator, "is_cached", lambda self, which=None, law=None, fx=None: False)
 
 
 @pytest.mark.parametrize("robot", ["ur5", "rr3"])
@@ -121,7 +121,7 @@ def test_prepare_builds_a_cold_integrator_and_leaves_a_warm_one(monkeypatch):
     assert planned_engine(spec.true_rigid, spec.law, spec.options) == ("fast", None)
     assert prepare(spec) is False  # warm: nothing to do
     calls = []
-    monkeypatch.setattr(CompiledSimulator, "is_cached", lambda self, which=None: bool(calls))
+    monkeypatch.setattr(CompiledSimulator, "is_cached", lambda self, which=None, law=None, fx=None: bool(calls))
     real = CompiledSimulator.sampled
 
     def sampled(self, *args, **kwargs):

@@ -487,3 +487,20 @@ def test_a_scheduled_k_subtracts_b_m_of_q_times_r(K, rng):
         make_law("robust", th, K=-1.0, K_inertia=25.0)
     with pytest.raises(ParameterError, match="K_inertia must be >= 0"):
         make_law("robust", th, K_inertia=-1.0)
+
+
+def test_the_robust_laws_share_one_xi_norm_and_it_stays_plain_python():
+    """rc3r.controllers.sliding.xi_norm is ||xi[:p]|| (3-4-12: 5 for p = 2, 13 for p = 3, by hand; a random
+    vector against numpy.linalg.norm to 1e-15 relative); both robust laws' theta return it, and called
+    from Python (a cold start's py_func) they compile nothing: the value kernels stay leaves."""
+    from rc3r.controllers import robust, robust_coeff
+    from rc3r.controllers.sliding import xi_norm
+
+    v = np.array([3.0, 4.0, 12.0])
+    assert xi_norm(v, 2) == 5.0 and xi_norm(v, 3) == 13.0
+    xi = np.random.default_rng(7).normal(size=15)
+    assert abs(xi_norm(xi, 15) - np.linalg.norm(xi)) <= 1e-15 * np.linalg.norm(xi)
+    for mod, law in ((robust, Robust(np.ones(15))), (robust_coeff, RobustPerCoefficient(np.ones(15), rho_i=np.ones(15)))):
+        th = xi.copy()
+        assert mod.theta.py_func(law.pack(3), 3, None, th, None) == xi_norm(xi, 15)
+    assert type(xi_norm).__name__ == "function"  # not a numba dispatcher

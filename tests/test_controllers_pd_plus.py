@@ -9,6 +9,7 @@ Python controller (``make check``). And it is reachable from a config file and t
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 import shutil
 
 import numpy as np
@@ -120,3 +121,34 @@ def test_exported_c_equals_rc3r(tmp_path, robot):
     code, numbers, stdout = _check(out)
     assert code == 0, stdout
     assert numbers["calls"] == 1000 and numbers["max_abs_diff"] <= BOUND, stdout
+
+
+def _held_loop_figure(arm, trajectory, Kd, rate: float, duration: float) -> float:
+    """T max_t lambda_max(M(q_d(t))^-1 Kd) along the reference, with Pinocchio's crba (every 0.01 s over the run):
+    the held loop M qdd = -Kd qd under a zero-order hold is stable only below 2 (forward Euler's bound)."""
+    import pinocchio as pin
+
+    data = arm.model.createData()
+    worst = 0.0
+    for q in trajectory.evaluate(np.arange(0.0, duration + 1e-9, 0.01))[0]:
+        M = pin.crba(arm.model, data, np.asarray(q, dtype=float))
+        M = np.triu(M) + np.triu(M, 1).T
+        worst = max(worst, float(np.max(np.linalg.eigvals(np.linalg.solve(M, np.diag(Kd))).real)))
+    return worst / rate
+
+
+def test_default_sampled_pd_plus_on_the_panda_at_1khz_is_clean():
+    """PD+'s class defaults (Kd = 100 on every joint) put the Panda's light wrist far past the held loop's bound
+    at 1 kHz (T lambda_max(M^-1 Kd) about 18, stable only below 2: it diverged within 10 ms); a sampled run
+    without gains takes the sampled-data rule's, as ``pd`` does: their figure along the run's reference,
+    computed here with Pinocchio's M, is the rule's target, K_SHARE real_limit at rate / margin (0.25 at 500 Hz:
+    0.125 at 1 kHz; 5 % for the rule's coarser samples), and the 1 s run (python engine) is clean."""
+    spec = rc3r.build_run(robot="panda", controller="pd-plus", rate=1000.0, duration=1.0)
+    assert "sampled-data rule" in spec.model["gains_source"]
+    arm = spec.controller_model
+    kd = np.broadcast_to(np.asarray(spec.law.Kd, dtype=float), (arm.n,))
+    assert _held_loop_figure(arm, spec.trajectory, np.full(arm.n, 100.0), 1000.0, 1.0) > 2.0
+    assert _held_loop_figure(arm, spec.trajectory, kd, 1000.0, 1.0) <= 0.125 * 1.05
+    res = rc3r.simulate(spec.true_plant, spec.law, spec.trajectory, replace(spec.options, engine="python"),
+                        loop=spec.loop, model=spec.controller_model)
+    assert res.outcome == "finished" and res.verdict == "clean", res.message

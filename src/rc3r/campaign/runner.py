@@ -51,7 +51,7 @@ from ..errors import ConfigError, WorkerLostError
 from ..io import atomic_path
 from .jobs import Job, run_job
 
-__all__ = ["RunTable", "run_many", "prepare", "read_rows", "sorted_rows", "format_value", "DASK_GRACE_S", "PARENT_POLL_S"]
+__all__ = ["RunTable", "run_many", "plan", "prepare", "read_rows", "sorted_rows", "format_value", "DASK_GRACE_S", "PARENT_POLL_S"]
 
 #: Seconds a Dask cluster may have no worker while runs wait before the campaign stops.
 DASK_GRACE_S = 60.0
@@ -353,13 +353,26 @@ def _dask(jobs, scheduler: str, grace: float):
         logging.getLogger("distributed.client").removeFilter(quiet)
 
 
+def plan(spec, laws=()) -> None:
+    """Plan this process's compiled instance for a campaign (:func:`rc3r.simulate._fast.plan`, kept and
+    inherited by the forked workers): the law of the :class:`rc3r.runspec.RunSpec` ``spec`` and the
+    registered laws named in ``laws``, on the effects of ``spec``'s plant. Every job then finds the
+    one instance :func:`prepare` builds (instead of one compile per law)."""
+    from ..controllers import LAWS
+    from ..simulate import _fast
+
+    codes = [spec.law.code] + [LAWS[name].code for name in laws if name in LAWS]
+    _fast.plan(codes, _fast.effect_codes(spec.true_plant.pack()) if spec.true_plant is not None else ())
+
+
 def prepare(spec) -> bool:
     """Build the compiled integrator a :class:`rc3r.runspec.RunSpec`'s run would use if it were warm (numba compiles it, or loads
     it from its disk cache), by simulating two control periods on it; True if it did.
 
-    Campaigns call it once before their jobs (``rc3r montecarlo``, ``sweep``, ``design``): each job alone
-    is short enough for ``"auto"`` to pass a cold compiled engine over (:meth:`~rc3r.simulate.engines.Engine.cold`),
-    so without it a fresh install's campaign would run every job on the python engine.
+    Campaigns call it once before their jobs (``rc3r montecarlo``, ``sweep``, ``design``), after :func:`plan`:
+    each job alone is short enough for ``"auto"`` to pass a cold compiled engine over
+    (:meth:`~rc3r.simulate.engines.Engine.cold`), so without it a fresh install's campaign would run every
+    job on the python engine.
     """
     from dataclasses import replace as _replace
 

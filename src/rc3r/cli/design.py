@@ -121,8 +121,8 @@ def cmd_design(args) -> int:
     """``rc3r design``: the rule, the verification, the files (module docstring)."""
     from ..campaign import RunTable, columns
     from ..design.report import design_figure, design_markdown, design_toml, failure_line, next_steps
-    from ..design.verify import design_config, verify_design
-    from ..campaign.runner import prepare
+    from ..design.verify import RUN_LAWS, design_config, verify_design
+    from ..campaign.runner import plan, prepare
     from ..io import read_config
     from ..runspec import build_run
     from .run import announce_compile, plant_options
@@ -157,7 +157,8 @@ def cmd_design(args) -> int:
     print(f"rc3r design: {first.true_rigid.n}-joint arm '{first.controller_model.label}', {args.rate:g} Hz (margin "
           f"{args.margin:g}), {args.n} random plants, {first.options.duration:g} s each, on {where} -> {out}/",
           file=sys.stderr)
-    announce_compile(first.true_rigid, float(args.rate))
+    plan(first, RUN_LAWS)  # one compiled instance for the design's laws
+    announce_compile(first.true_rigid, float(args.rate), first)
     prepare(first)  # compile once here: the jobs alone are short enough to pass a cold engine over
     t0 = time.perf_counter()
     with output_dir(out, own=DESIGN_ENTRIES) as tmp:

@@ -24,13 +24,19 @@ def _progress(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-def announce_compile(plant, rate=False) -> None:
+def announce_compile(plant, rate=False, spec=None) -> None:
     """Say so before a first run compiles the robot's simulator (numba, once; measured on the 2-core machine:
     the 3R's continuous integrator 34 s and its sampled one 20 s (``rc3r bench``, 2026-12-05), 87 s of CPU for
-    the UR5 chain engine (2026-12-02))."""
+    the UR5 chain engine (2026-12-02)); ``spec``: the run (a :class:`rc3r.runspec.RunSpec`), whose law and
+    plant effects choose the instance (:meth:`rc3r.simulate._fast.CompiledSimulator.for_run`), else the
+    instance of every registered law and effect."""
     eng = simulator(plant)
     which = None if rate is False else ("continuous" if rate is None else "sampled")  # False: both modes
-    if eng is not None and not eng.is_cached(which):
+    law, fx = None, None
+    if spec is not None and spec.law.code is not None:
+        law = spec.law.code
+        fx = spec.true_plant.pack() if spec.true_plant is not None else None
+    if eng is not None and not eng.is_cached(which, law, fx):
         small = {"continuous": "about 35 s", "sampled": "about 20 s"}.get(which, "about a minute")
         what = small if plant.n <= 3 else "1-2 minutes for a 6-joint arm"
         _progress(f"rc3r: compiling the simulator's kernels (numba): {what}, once; cached on disk afterwards")
@@ -69,7 +75,7 @@ def announce_engine(spec) -> str | None:
         return (f"rc3r: python engine: the compiled one is passed over, {why}; a run of over "
                 f"{COLD_MAX_SUBSTEPS} sub-steps, --engine fast or RC3R_COLD_START=compile builds it (once)")
     if name == "fast":
-        announce_compile(spec.true_rigid, spec.options.rate)
+        announce_compile(spec.true_rigid, spec.options.rate, spec)
     return None
 
 
@@ -319,7 +325,11 @@ def _theory_figures(res: dict, out: Path, mode: str, label: str) -> None:
 def _paper(paper, out: Path) -> int:
     from ..plotting import plot_error_comparison
 
-    announce_compile(paper.scenarios(duration=0.01)[0].true_rigid)
+    from ..campaign.runner import plan
+
+    short = paper.scenarios(duration=0.01)
+    plan(short[0], [spec.law.name for spec in short])  # one compiled instance for the scenarios' laws
+    announce_compile(short[0].true_rigid, spec=short[0])
     t_start = time.perf_counter()
     rows, results = [], {}
     for mode, rate in (("continuous", None), ("sampled", paper.PAPER_SAMPLED_RATE)):

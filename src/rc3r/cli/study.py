@@ -28,7 +28,7 @@ from ..io import atomic_savefig, atomic_write_json, atomic_write_text
 from ..provenance import provenance
 from . import EXIT
 from ._output import check_output_path, locked
-from ..campaign.runner import prepare
+from ..campaign.runner import plan, prepare
 from .run import announce_compile
 
 
@@ -91,7 +91,8 @@ def _campaign(args, kind: str, jobs, request: dict, finish) -> int:
                 print(f"rc3r {kind}: {table.dropped} incomplete row(s) of {out}/runs.csv dropped; they run again",
                       file=sys.stderr)
             print(f"rc3r {kind}: {len(jobs)} runs, {done} already done, on {where} -> {out}/", file=sys.stderr)
-            announce_compile(first.true_rigid, first.options.rate)
+            plan(first, [j.controller for j in jobs])  # one compiled instance for the campaign's laws
+            announce_compile(first.true_rigid, first.options.rate, first)
             prepare(first)  # compile once here: the jobs alone are short enough to pass a cold engine over
             bar = _progress_bar(len(jobs), done, kind)
             t0 = time.perf_counter()

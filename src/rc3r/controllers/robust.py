@@ -7,7 +7,6 @@ Inside the boundary layer :math:`\|\xi\| \le \epsilon` the law is the high gain
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from numba import njit
@@ -15,7 +14,7 @@ from numba import njit
 from ._kernels import regressor_transpose
 from .base import Layout, _nonnegative, _positive, _scalar, at, packed, register_law
 from .sliding import (C_XI_HEAD, Sliding, c_parts, inertia_gain, signals, slopes,  # noqa: F401
-                      xi_directions)
+                      xi_directions, xi_norm)
 from .sliding import no_state_gain as state_gain, xi_theta_columns as theta_columns  # noqa: F401
 
 __all__ = ["Robust", "LAYOUT"]
@@ -55,10 +54,7 @@ USES_XI = True
 def theta(cp, n, z, th_eff, zdot):
     """Eq. (6): theta_eff (p,) = theta_0 - rho xi / max(||xi||, eps) from ``th_eff`` = xi; returns ||xi||."""
     p = int(cp[0])
-    nrm2 = 0.0
-    for j in range(p):
-        nrm2 += th_eff[j] * th_eff[j]
-    nrm = math.sqrt(nrm2)
+    nrm = xi_norm(th_eff, p)
     t0 = at(_THETA, n, p)
     scale = cp[at(_RHO, n, p)] / max(nrm, cp[at(_EPS, n, p)])
     for j in range(p):
@@ -71,10 +67,7 @@ def weights(cp, n, xi, om):
     r"""``d theta_eff = diag(om) d xi + beta xi (xi^T d xi)``: ``om`` (p,) = -rho / max(||xi||, eps); returns
     beta = rho / ||xi||^3 outside the layer, 0 inside."""
     p = xi.shape[0]
-    nrm = 0.0
-    for k in range(p):
-        nrm += xi[k] * xi[k]
-    nrm = math.sqrt(nrm)
+    nrm = xi_norm(xi, p)
     rho, eps = cp[at(_RHO, n, p)], cp[at(_EPS, n, p)]
     o = -rho / max(nrm, eps)
     for k in range(p):

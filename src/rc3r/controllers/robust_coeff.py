@@ -5,7 +5,6 @@ On the sliding variable (:mod:`.sliding`): :math:`\delta_i = -\rho_i\, \xi_i / \
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,7 +13,7 @@ from numba import njit
 from ._kernels import regressor_transpose
 from .base import Layout, _nonnegative, _positive, _sized, at, packed, register_law
 from .sliding import (C_XI_HEAD, Sliding, c_parts, inertia_gain, signals, slopes,  # noqa: F401
-                      xi_directions)
+                      xi_directions, xi_norm)
 from .sliding import no_state_gain as state_gain, xi_theta_columns as theta_columns  # noqa: F401
 
 __all__ = ["RobustPerCoefficient", "LAYOUT"]
@@ -50,10 +49,7 @@ USES_XI = True
 def theta(cp, n, z, th_eff, zdot):
     """Eq. (7): theta_eff_i = theta_0i - rho_i xi_i / max(|xi_i|, eps_i) from ``th_eff`` = xi; returns ||xi||."""
     p = int(cp[0])
-    nrm2 = 0.0
-    for j in range(p):
-        nrm2 += th_eff[j] * th_eff[j]
-    nrm = math.sqrt(nrm2)
+    nrm = xi_norm(th_eff, p)
     t0, ro, eo = at(_THETA, n, p), at(_RHO, n, p), at(_EPS, n, p)
     for j in range(p):
         th_eff[j] = cp[t0 + j] - cp[ro + j] * th_eff[j] / max(abs(th_eff[j]), cp[eo + j])

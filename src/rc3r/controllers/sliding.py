@@ -12,16 +12,18 @@ after), so :func:`signals`, :func:`inertia_gain` and :func:`slopes` serve them a
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+from numba.extending import register_jitable
 
 from ..errors import ParameterError
 from .base import (Law, Layout, _gain_matrix, _is_matrix, _nonnegative, _positive, _scalar, _sized, at,
                    packed)
 
-__all__ = ["Sliding", "signals", "inertia_gain", "slopes", "xi_directions", "xi_theta_columns", "no_state_gain",
+__all__ = ["Sliding", "xi_norm", "signals", "inertia_gain", "slopes", "xi_directions", "xi_theta_columns", "no_state_gain",
            "c_parts", "C_XI_HEAD"]
 
 _INLINE = dict(cache=True, nogil=True, inline="always")
@@ -81,6 +83,17 @@ class Sliding(Law):
 #: The prefix every sliding law's LAYOUT starts with.
 PREFIX = Layout.of(Sliding)
 _K, _KM, _KO, _LAM, _KI = (PREFIX.index(k) for k in ("K", "K_matrix", "K_offdiag", "Lambda", "K_inertia"))
+
+
+@register_jitable
+def xi_norm(xi, p):
+    """``||xi[:p]||``: the squares summed in index order, then the square root (the robust laws' ``theta`` and
+    ``weights``). ``register_jitable``, not ``njit``: called from Python (a value kernel's ``py_func`` on a
+    cold start) it runs as plain Python and compiles nothing, so those kernels stay leaves (:mod:`.base`)."""
+    s = 0.0
+    for j in range(p):
+        s += xi[j] * xi[j]
+    return math.sqrt(s)
 
 
 @njit(**_INLINE)

@@ -66,7 +66,7 @@ __all__ = ["stability_limit", "real_limit", "Spectrum", "spectrum", "ThetaModel"
            "eps_boundary", "sampled_gains", "DESIGNED_LAWS", "LAMBDA_MAX", "B_FRACTION"]
 
 #: Laws the rule designs (their gains are K, Lambda, eps / eps_i / Gamma, or Kp, Kd).
-DESIGNED_LAWS = ("robust", "robust-coeff", "adaptive", "fbl", "pd")
+DESIGNED_LAWS = ("robust", "robust-coeff", "adaptive", "fbl", "pd", "pd-plus")
 #: b = min(rate / B_FRACTION, ...) [1/s]: the velocity loop's bandwidth, a twentieth of the rate at most.
 B_FRACTION = 20.0
 #: Lambda = min(b / B_OVER_LAMBDA, LAMBDA_MAX) [1/s]: the error's mode 2.5x slower than the velocity loop.
@@ -230,7 +230,8 @@ class Design:
             return {**sliding, "Gamma": float(self.Gamma)}
         if law == "fbl":
             return dict(self.fbl)
-        if law == "pd":
+        if law in ("pd", "pd-plus"):  # PD+'s error loop near the reference, M e'' + (C + Kd) e' + Kp e = 0, holds
+            # the same Kd mode as PD's: the same gains
             return {k: [float(x) for x in v] for k, v in self.pd.items()}
         raise ParameterError(f"the rule designs {', '.join(DESIGNED_LAWS)}, not {law!r}")
 
@@ -329,7 +330,7 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
     It is :math:`T'\\lambda_{\\max}` of the held loop divided by :func:`real_limit`; for the sliding laws
     also :math:`T'\\Lambda` (the error's own mode) counts. A law the rule does not know gives nan.
     """
-    from ..controllers import Adaptive, FeedbackLinearization, PDGravity, Robust, RobustPerCoefficient
+    from ..controllers import Adaptive, FeedbackLinearization, PDGravity, PDPlus, Robust, RobustPerCoefficient
 
     rate, margin = _check_rate(rate, margin)
     Tm, a, n = margin / rate, real_limit(delay), spec.n
@@ -354,7 +355,7 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
         disc = np.sqrt(np.maximum(kd ** 2 - 4 * kp, 0.0))
         fastest = np.where(kd ** 2 >= 4 * kp, (kd + disc) / 2, np.sqrt(kp))
         return float(Tm * np.max(fastest)) / a
-    if isinstance(law, PDGravity):
+    if isinstance(law, (PDGravity, PDPlus)):  # the held loop M qdd = -Kd qd: T lambda_max(M^-1 Kd)
         return Tm * spec.lam(vec(law.Kd)) / a
     return math.nan
 

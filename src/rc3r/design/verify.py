@@ -44,7 +44,11 @@ from ..errors import ConfigError
 from .rule import fast_design, spectrum
 from .worst import Hardest
 
-__all__ = ["DesignResult", "controller_model", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
+__all__ = ["RUN_LAWS", "DesignResult", "controller_model", "design_config", "plant_specs", "start_eps", "verify_design", "summarize"]
+
+#: The laws a design runs (the robust law, the baselines, eq. 7): ``rc3r design`` plans one compiled instance
+#: for them all (:func:`rc3r.campaign.runner.prepare`); :meth:`_Runner.jobs` refuses another.
+RUN_LAWS = ("robust", "robust-coeff", "fbl", "adaptive")
 
 
 #: Share of the held loop's stability limit at rate / margin that K alone may use on the hardest plant of the
@@ -314,6 +318,9 @@ class _Runner:
 
     def jobs(self, law, gains, eps, rate, plants, tag=""):
         from ..campaign.jobs import Job
+
+        if law not in RUN_LAWS:
+            raise RuntimeError(f"a design runs the laws of RUN_LAWS, not {law!r}: add it there")
 
         cfg = json.dumps({**self.cfg, "gains": {law: gains}}, sort_keys=True)
         return [Job(k, spec, law, eps, float(rate), self.duration, config=cfg, tag=tag) for k, spec in plants]

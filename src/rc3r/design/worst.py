@@ -393,9 +393,15 @@ class Hardest:
             from ..identify.bounds_file import load_bounds
             from ..plant_sets import _bounds_plant
 
-            bf = load_bounds(cfg["bounds"], robot=spec.controller_model)
+            from ..plant_sets import _actuated_bounds_plant
+            from ..robots.actuated import ActuatedRobot
+
+            model = spec.controller_model  # with a file's joint coefficients: friction and armature (ActuatedRobot)
+            rigid = model.rigid if isinstance(model, ActuatedRobot) else model
+            bf = load_bounds(cfg["bounds"], robot=rigid)
+            draw = _actuated_bounds_plant if isinstance(model, ActuatedRobot) and bf.get("actuator") else _bounds_plant
             self.kind = "ellipsoid"
-            self.realise = lambda s: _bounds_plant(spec.controller_model, bf, s)  # the plants a run of the bounds draws
+            self.realise = lambda s: draw(rigid, bf, s)  # the plants a run of the bounds draws
             self.pool = [(f"boundary:{k}", self.search.mass(self.realise(f"boundary:{k}").theta))
                          for k in range(BOUNDARY_DRAWS)]  # seeded, realisable: the closed form's stand-ins
         else:

@@ -4,11 +4,15 @@ supply, run in chunks.
 **Instantiation.** A robot names its kernel supply by :attr:`~rc3r.robots.base.Robot.compiled_kernels`
 ``(module, kc)`` (contract: :mod:`.engines._template`). :func:`instantiate` writes the source of
 :mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module and its
-``# law dispatch`` line replaced by the dispatch over the registered laws (:mod:`.engines._dispatch`) into a
-cache directory keyed by :func:`rc3r._numba_cache.package_hash` (and, for a supply or a law module outside
-rc3r, its own source), atomically and only once (the first writer wins, so numba's stamp, the
-file's time and size, stays valid), and imports it: numba caches its functions on disk like any
-module's. Any edit of a numba module of the package makes a new directory, hence a fresh compile.
+``# law dispatch`` line replaced by the dispatch over a choice of laws (:mod:`.engines._dispatch`), beside
+the dispatch over a choice of plant effects (:mod:`.engines._effects`): a run takes those of its own law
+and plant (:meth:`CompiledSimulator.for_run`), a command that runs several laws those of its :func:`plan`
+(every branch is code numba compiles into every integrator: ``docs/performance.md``, "Compile time").
+Each choice is one file, named by a hash of its text (and, for a supply or a law or effect module outside
+rc3r, their sources), in a folder keyed by :func:`rc3r._numba_cache.package_hash`, written atomically
+and only once (the first writer wins, so numba's stamp, the file's time and size, stays valid), and
+imported: numba caches its functions on disk like any module's. Any edit of a numba module of the
+package makes a new folder, hence a fresh compile.
 The directory is ``$NUMBA_CACHE_DIR/rc3r_engines`` if that is set, else the user's cache
 (``$XDG_CACHE_HOME`` or ``~/.cache``)``/rc3r/engines``, else the temporary directory (never
 inside the package: :func:`rc3r._numba_cache.package_hash` reads every module there);
@@ -27,6 +31,7 @@ stops within seconds instead of running for hours.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib
 import importlib.util
@@ -46,7 +51,7 @@ from . import status as S
 from .engines import _dispatch
 from .steps import continuous_method, period_budget
 
-__all__ = ["CompiledSimulator", "simulator", "instantiate", "run", "CHUNK_S", "HMAX"]
+__all__ = ["CompiledSimulator", "simulator", "instantiate", "plan", "planned", "effect_codes", "run", "CHUNK_S", "HMAX"]
 
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
@@ -121,19 +126,55 @@ def _write_once(path: Path, text: str) -> None:
         tmp.unlink(missing_ok=True)
 
 
-def instantiate(module: str):
+def _chosen(registry: list, codes, what: str) -> list:
+    """The classes of ``registry`` (by code) whose ``code`` is in ``codes`` (None: all of them); ParameterError
+    naming a code no class of it has."""
+    if codes is None:
+        return list(registry)
+    want = sorted({int(c) for c in codes})
+    known = {int(c.code) for c in registry}
+    unknown = [c for c in want if c not in known]
+    if unknown:
+        raise ParameterError(f"no compiled {what} has code(s) {unknown} (registered: {sorted(known)})")
+    return [c for c in registry if int(c.code) in want]
+
+
+def instantiate(module: str, laws=None, effects=None):
     """The compiled integrators (:mod:`.engines.compiled`) instantiated on the kernel supply ``module``
-    (a dotted module name), on the registered laws (the law dispatch :mod:`.engines._dispatch` writes into
-    it) and on the plant effects registered now (:data:`rc3r.plants.EFFECTS`, through the dispatch
-    :func:`.engines._effects.source` writes beside it), imported once per process and registries;
-    ParameterError if it is no supply."""
+    (a dotted module name), for the compiled laws of codes ``laws`` (the law dispatch :mod:`.engines._dispatch`
+    writes into it) and the plant effects of codes ``effects`` (the dispatch :func:`.engines._effects.source`
+    writes beside it), imported once per process and choice; ParameterError if it is no supply or a code is
+    not registered.
+
+    Parameters
+    ----------
+    module : str
+        Dotted name of the kernel supply (:mod:`.engines._template`).
+    laws, effects : iterable of int, optional
+        Codes of registered compiled laws (:data:`rc3r.controllers.LAWS`) and effects
+        (:data:`rc3r.plants.EFFECTS`) the instance has a branch for; None (default): every registered one.
+        A run takes the instance of its own law and its plant's effects (:meth:`CompiledSimulator.for_run`):
+        each branch is code numba compiles into every integrator, so an instance of what a run uses
+        compiles in a fraction of the time of one of everything (``docs/performance.md``, "Compile time").
+
+    Returns
+    -------
+    module
+        The instantiated module (its integrators, ``LAW_CODES`` and ``EFFECT_CODES``).
+    """
     from ..plants import EFFECTS
     from .engines import _effects
 
-    laws = _dispatch.signature()
-    codes = tuple((c.code, c.name, c.value_kernel, c.slope_kernel) for c in _effects.compiled_effects(EFFECTS))
-    if (module, laws, codes) in _INSTANCES:
-        return _INSTANCES[(module, laws, codes)]
+    law_classes = _chosen(_dispatch.compiled_laws(), laws, "law")
+    effect_classes = _chosen(list(_effects.compiled_effects(EFFECTS)), effects, "effect")
+    if not law_classes:
+        raise ParameterError("an instance of the compiled engine needs at least one law")
+    law_reg = {cls.name: cls for cls in law_classes}
+    effect_reg = {cls.name: cls for cls in effect_classes}
+    sig = _dispatch.signature(law_reg)
+    codes = tuple((c.code, c.name, c.value_kernel, c.slope_kernel) for c in effect_classes)
+    if (module, sig, codes) in _INSTANCES:
+        return _INSTANCES[(module, sig, codes)]
     if not isinstance(module, str) or not _DOTTED.match(module):
         raise ParameterError(f"kernel supply must be a dotted module name, got {module!r}")
     try:
@@ -147,33 +188,34 @@ def instantiate(module: str):
     if template.count(MARKER) != 1 or template.count(TANGENT_MARKER) != 1 or template.count(_dispatch.MARKER) != 1:
         raise RuntimeError("rc3r.simulate.engines.compiled lost a kernel-supply or law-dispatch line")
     source = template.replace(MARKER, MARKER.replace("rc3r.simulate.engines._template", module))
-    source = source.replace(_dispatch.MARKER, _dispatch.law_source())
+    source = source.replace(_dispatch.MARKER, _dispatch.law_source(law_reg))
     if all(hasattr(supply, f) for f in _TANGENTS):
         source = source.replace(TANGENT_MARKER, TANGENT_MARKER.replace("rc3r.simulate.engines._template", module))
     if source.count(_effects.MARKER) != 1 or source.count("from rc3r.simulate.engines._effects import") != 1:
         raise RuntimeError("rc3r.simulate.engines.compiled lost an effect-dispatch line")
-    dispatch = _effects.source(EFFECTS)
-    h = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode() + source.encode() + b"\0"
-                       + dispatch.encode())
+    dispatch = _effects.source(effect_reg)
+    version = hashlib.sha256(f"{_numba_cache.package_hash()}\0{module}\0".encode())
+    h = version.copy()
+    h.update(source.encode() + b"\0" + dispatch.encode())
     # every module the instantiated text imports counts: the supply, the laws' and the effects' kernel
     # modules (inside the package, package_hash covers those that use numba; outside, their own source)
-    for name_ in (module,) + _effects.kernel_modules(EFFECTS):
+    for name_ in (module,) + _effects.kernel_modules(effect_reg):
         file_ = getattr(sys.modules.get(name_) or importlib.import_module(name_), "__file__", None)
         if file_ and not _numba_cache._inside(file_):
             h.update(Path(file_).read_bytes())
-    for law_file in _dispatch.law_files():  # a registered law's module outside the package
+    for law_file in _dispatch.law_files(law_reg):  # a registered law's module outside the package
         h.update(Path(law_file).read_bytes())
-    key = h.hexdigest()[:16]
+    key, folder = h.hexdigest()[:16], version.hexdigest()[:16]  # one folder per package version and supply
     stem = module.replace(".", "_")
     effects_name = f"_rc3r_effects_{key}"
     source = source.replace(_effects.MARKER, _effects.MARKER.replace("rc3r.simulate.engines._effects", effects_name))
     errors = []
     for root in _roots():
-        path = root / key / f"{stem}.py"
+        path = root / folder / f"{stem}_{key}.py"
         try:
             _write_once(path.with_name(f"{effects_name}.py"), dispatch)
             _write_once(path, source)
-            _prune(root, key)
+            _prune(root, folder)
             break
         except OSError as exc:
             errors.append(f"{root}: {exc.strerror or exc}")
@@ -182,7 +224,7 @@ def instantiate(module: str):
     if effects_name not in sys.modules:
         _load(effects_name, path.with_name(f"{effects_name}.py"))
     mod = _load(f"_rc3r_engine_{stem}_{key}", path)
-    _INSTANCES[(module, laws, codes)] = mod
+    _INSTANCES[(module, sig, codes)] = mod
     return mod
 
 
@@ -219,8 +261,30 @@ class CompiledSimulator:
 
     @property
     def instance(self):
-        """The instantiated module (:func:`instantiate`)."""
+        """The instantiated module on every registered law and effect (:func:`instantiate`)."""
         return instantiate(self.module)
+
+    def for_run(self, law: int, fx=None):
+        """The instance a run of the law of code ``law`` on a plant of packed effects ``fx``
+        (:meth:`rc3r.plants.Plant.pack`; None: none) takes: one already imported in this process that has
+        a branch for each of them; else, if the law is in the :func:`planned` set and the effects among
+        its effects, the instance of that set; else :func:`instantiate` of exactly these codes."""
+        from ..plants import EFFECTS
+        from .engines import _effects
+
+        codes = effect_codes(fx)
+        laws = {c.code: (c.code, c.name, c.__module__) for c in _dispatch.compiled_laws()}
+        effects = {c.code: (c.code, c.name, c.value_kernel, c.slope_kernel)
+                   for c in _effects.compiled_effects(EFFECTS)}
+        if int(law) in laws and all(c in effects for c in codes):
+            need_l, need_e = {laws[int(law)]}, {effects[c] for c in codes}
+            for (module, sig, ecodes), mod in _INSTANCES.items():
+                if module == self.module and need_l <= set(sig) and need_e <= set(ecodes):
+                    return mod
+        plan_laws, plan_effects = _PLAN[0] if _PLAN else ((), ())
+        if int(law) in plan_laws and set(codes) <= set(plan_effects):
+            return instantiate(self.module, plan_laws, plan_effects)
+        return instantiate(self.module, (int(law),), codes)
 
     def constants(self, rigid) -> np.ndarray:
         """The packed constants ``kc`` of ``rigid`` (its ``compiled_kernels`` must name this supply)."""
@@ -229,10 +293,11 @@ class CompiledSimulator:
             raise ParameterError(f"robot {rigid.name!r} supplies kernels {module!r}, its engine runs {self.module!r}")
         return np.ascontiguousarray(kc, dtype=np.float64)
 
-    def is_cached(self, which: str | None = None) -> bool:
+    def is_cached(self, which: str | None = None, law: int | None = None, fx=None) -> bool:
         """True if the integrators of this supply a run needs are compiled in this process or held
         valid by numba's disk cache (no compilation on first use, :func:`rc3r._numba_cache.ready`):
-        ``which`` ``"sampled"``, ``"continuous"``, or None for both.
+        ``which`` ``"sampled"``, ``"continuous"``, or None for both; ``law`` and ``fx`` as in :meth:`for_run`
+        (None: the instance of every registered law and effect).
 
         Reads numba's cache index (an internal of numba 0.59-0.68); if it cannot be read, answers
         True (no announcement and no cold-start fallback rather than a wrong one).
@@ -240,7 +305,7 @@ class CompiledSimulator:
         from .._numba_cache import ready
 
         try:
-            mod = self.instance
+            mod = self.instance if law is None else self.for_run(law, fx)
             funcs = {"sampled": (mod.integrate_sampled,), "continuous": (mod.integrate_continuous,)}.get(
                 which, (mod.integrate_continuous, mod.integrate_sampled))
         except (AttributeError, ParameterError):
@@ -252,7 +317,7 @@ class CompiledSimulator:
         """``kc``: :meth:`constants` of ``rigid`` if already packed (a run packs them once for all its chunks);
         ``method``: a code of :data:`rc3r.simulate.METHODS` (default 0, ode23s)."""
         kc = self.constants(rigid) if kc is None else kc
-        return self.instance.integrate_continuous(x0, t_out, kc, fx, code, cp, tp, rtol, atol, h0,
+        return self.for_run(code, fx).integrate_continuous(x0, t_out, kc, fx, code, cp, tp, rtol, atol, h0,
                                                   hmax, lim, X, U, R, yn, jac_reuse, max_steps, int(method))
 
     def sampled(self, rigid, fx, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv, noise, quant,
@@ -261,9 +326,48 @@ class CompiledSimulator:
         ``nsub`` RK4 sub-steps, 1 by adaptive ROS4 steps and 2 by adaptive RODAS steps (``rtol``, ``atol``, at
         most ``budget`` per period)."""
         kc = self.constants(rigid) if kc is None else kc
-        return self.instance.integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, code, cp,
+        return self.for_run(code, fx).integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, code, cp,
                                                tp, lim, X, U, R, yn, tv, noise, quant, ubuf, int(stiff),
                                                float(rtol), float(atol), int(budget))
+
+
+_PLAN: list = []
+
+
+def plan(laws=(), effects=()) -> tuple:
+    """From now on in this process (and in the worker processes it forks), a run of one of the compiled laws
+    of codes ``laws`` on a plant whose effects are among the codes ``effects`` takes the one instance of all
+    of them (:meth:`CompiledSimulator.for_run`): a command that runs several laws (``rc3r paper``, a design, a
+    campaign) compiles each integrator once, not once per law. Returns the plan it replaces (``()``: none).
+
+    Parameters
+    ----------
+    laws, effects : iterable of int
+        Codes of registered compiled laws and plant effects (a law with no compiled kernel, code None, is
+        skipped); ParameterError at the first run if one is not registered. Both empty: no plan.
+    """
+    before = _PLAN[0] if _PLAN else ()
+    law_codes = tuple(sorted({int(c) for c in laws if c is not None}))
+    _PLAN[:] = [(law_codes, tuple(sorted({int(c) for c in effects})))] if law_codes else []
+    return before
+
+
+@contextlib.contextmanager
+def planned(laws=(), effects=()):
+    """:func:`plan` within a ``with`` block; the plan before it is restored after."""
+    before = plan(laws, effects)
+    try:
+        yield
+    finally:
+        _PLAN[:] = [before] if before else []
+
+
+def effect_codes(fx) -> tuple[int, ...]:
+    """The effect codes of packed effects ``fx`` (:meth:`rc3r.plants.Plant.pack`), sorted, once each; () for None."""
+    if fx is None:
+        return ()
+    m = int(fx[0])
+    return tuple(sorted({int(c) for c in np.asarray(fx)[1:1 + 2 * m:2]}))
 
 
 #: One :class:`CompiledSimulator` per supply module, shared by every robot that declares it.
@@ -303,7 +407,7 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     eng = simulator(rigid)
     n = plant.n
     fx = plant.pack()
-    stale = [e.name for e in plant.packed() if e.code not in eng.instance.EFFECT_CODES]
+    stale = [e.name for e in plant.packed() if e.code not in eng.for_run(law.code, fx).EFFECT_CODES]
     if stale:  # cannot happen through instantiate (keyed on the registry); a guard for a hand-made instance
         raise ParameterError(f"the compiled engine has no branch for plant effect(s) {', '.join(stale)}")
     kc = eng.constants(rigid)  # once per run (packing the UR5's took 0.4 ms per chunk)

@@ -2,7 +2,8 @@ r"""The compiled engine's dispatch over the registered laws, written from :data:
 
 The integrators of :mod:`.compiled` call a law through seven functions of its integer ``code``. They are
 not written by hand: :func:`law_source` writes them from the registry when :func:`rc3r.simulate._fast.instantiate`
-instantiates the engine on a kernel supply, one branch per registered compiled law (its module's kernels,
+instantiates the engine on a kernel supply, one branch per compiled law of the instance (the run's, or a
+command's planned set; its module's kernels,
 :mod:`rc3r.controllers.base`) and none that falls through: a code no law has raises. The text replaces the
 line of :mod:`.compiled` marked ``# law dispatch`` (:data:`MARKER`); the instantiation's cache key counts
 that text, the package's numba modules (:func:`rc3r._numba_cache.package_hash`) and the source of any law
@@ -28,11 +29,14 @@ from numba import njit
 
 from ..._numba_cache import _inside
 
-__all__ = ["MARKER", "law_source", "law_files", "compiled_laws", "signature"]
+__all__ = ["MARKER", "LAW_CODES", "law_source", "law_files", "compiled_laws", "signature"]
 
 #: The line of :mod:`.compiled` that each instantiation replaces with :func:`law_source`.
-MARKER = ("from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, "
-          "law_slopes, law_theta, uses_xi  # law dispatch")
+MARKER = ("from rc3r.simulate.engines._dispatch import LAW_CODES, inertia_gain, law_directions, law_jacobian, "
+          "law_signals, law_slopes, law_theta, uses_xi  # law dispatch")
+
+#: The law codes this dispatch has a branch for (none in the stubs; an instance's are its laws').
+LAW_CODES = ()
 
 _JIT = dict(cache=True, nogil=True)
 
@@ -99,6 +103,7 @@ def law_source(laws=None) -> str:
     parts = [
         "# ---- the law dispatch: written by rc3r.simulate.engines._dispatch from rc3r.controllers.LAWS ----",
         *imports,
+        f"LAW_CODES = {tuple(int(c.code) for c in laws)!r}",
         "from rc3r.simulate.engines._jacobian import finish as _finish, signal_columns as _signal_columns",
         "_LAW_INLINE = dict(cache=True, nogil=True, inline=\"always\")",
         "_LAW_JIT = dict(cache=True, nogil=True, error_model=\"numpy\")",
@@ -135,7 +140,7 @@ def law_source(laws=None) -> str:
         "",
         "",
         "@njit(**_LAW_JIT)\n" + branch(
-            "def law_jacobian(code, cp, es, x, u, Y, r, rows, tw, J, Ft):\n"
+            "def law_jacobian(code, cp, es, x, Y, r, rows, tw, J, Ft):\n"
             "    Ux, Xi, xs, bt = tw[5], tw[6], tw[9], tw[14]\n"
             "    n = Y.shape[0]\n"
             "    _signal_columns(Y, r, rows, tw)",
@@ -186,6 +191,6 @@ def law_directions(code, cp, Y, r, tw):
 
 
 @njit(**_JIT)
-def law_jacobian(code, cp, es, x, u, Y, r, rows, tw, J, Ft):
+def law_jacobian(code, cp, es, x, Y, r, rows, tw, J, Ft):
     """Stub (never instantiated): raises."""
     raise RuntimeError("the law dispatch is written at instantiation (rc3r.simulate._fast.instantiate)")

@@ -168,7 +168,7 @@ class CompiledEngine(Engine):
             return None
         steps = round(options.duration * options.rate) * options.substeps
         sim = simulator(plant.rigid)
-        if steps > COLD_MAX_SUBSTEPS or sim is None or sim.is_cached("sampled"):
+        if steps > COLD_MAX_SUBSTEPS or sim is None or sim.is_cached("sampled", law.code, plant.pack()):
             return None
         return (f"its compiled integrator is not built yet and {steps} RK4 sub-steps take the python engine "
                 "less time than compiling it")

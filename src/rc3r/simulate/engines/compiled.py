@@ -34,7 +34,7 @@ from rc3r.plants._kernels import measure
 from rc3r.simulate.engines._effects import CODES as EFFECT_CODES, actuate, damping as _damping, effect_slopes as _effect_slopes, has_torque as _friction, joint_torque as _joint_torque  # noqa: F401 - effect dispatch
 from rc3r.simulate.engines._template import apply_into as _apply, forward_dynamics_into as _fd, make_work as _make_work, mass_into as _mass, passes_into as _passes, xi_into as _xi  # kernel supply
 from rc3r.simulate.engines._template import plant_tangents_into as _ptangents, tangents_into as _tangents  # kernel supply (optional)
-from rc3r.simulate.engines._dispatch import inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
+from rc3r.simulate.engines._dispatch import LAW_CODES, inertia_gain, law_directions, law_jacobian, law_signals, law_slopes, law_theta, uses_xi  # law dispatch
 from rc3r.simulate.engines._jacobian import work as _tangent_work
 from rc3r.simulate.engines._linalg import _lu_factor, _lu_solve
 from rc3r.simulate.engines._sdirk import BHAT as _SDIRK3_BHAT, NEWTON_MAX as _NEWTON_MAX, NEWTON_TOL as _NEWTON_TOL, SG as _SG, SLOPE_GUARD as _SLOPE_GUARD, KNEE_FLOOR as _KNEE_FLOOR, MI_REUSE as _MI_REUSE, TABLE as _SDIRK3, error_norm as _error_norm, factor as _factor, slope_ratio as _slope_ratio  # noqa: E501
@@ -147,7 +147,7 @@ def _tangent_jacobian(t, x, kc, wk, fx, law, cp, tp, J, Ft, F0, u, ref, Y, th, v
     for i in range(rows):
         _tangents(kc, tw[8][i], q, qd, v, a, tw[13][i], wk)
     _effect_slopes(fx, u, qd, tw[15])  # the plant effects' slopes at the delivered u and qd
-    return law_jacobian(law, cp, tw[15], x, u, Y, r, rows, tw, J, Ft)
+    return law_jacobian(law, cp, tw[15], x, Y, r, rows, tw, J, Ft)
 
 
 @njit(**_JIT)
