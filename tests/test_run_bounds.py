@@ -31,8 +31,10 @@ def bounds_file(tmp_path_factory):
 @pytest.mark.parametrize("law", ["robust", "robust-coeff", "robust-ellipsoid"])
 def test_run_takes_the_identified_bounds(bounds_file, law, tmp_path, capsys):
     """metrics.json's model is the file's theta_0 and (per law) rho, rho_i, P, read back independently
-    with load_bounds; the run tracks the nominal plant."""
+    with load_bounds: over rigid and joint coefficients (the file's ``actuator`` part) when the file has them
+    (format rc3r-bounds/2, the controller's model then an ActuatedRobot); the run tracks the nominal plant."""
     b = load_bounds(bounds_file)
+    b = b["actuator"] or b
     out = tmp_path / law
     argv = ["run", "--controller", law, "--bounds", str(bounds_file), "--duration", "0.5", "--out", str(out)]
     if law == "robust-ellipsoid":
