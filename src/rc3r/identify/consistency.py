@@ -76,12 +76,9 @@ def standard_map(robot, seed: int = 0, states: int | None = None) -> np.ndarray:
     import pinocchio as pin
 
     model = robot.model
-    n, p = robot.n, robot.p
-    states = int(states or max(20, 4 * p))
-    rng = np.random.default_rng(seed)
-    Q = rng.uniform(-np.pi, np.pi, (states, n))
-    QD, QDD = rng.uniform(-3.0, 3.0, (2, states, n))
-    Y = np.asarray(robot.regressor(Q, QD, QD, QDD), dtype=float).reshape(-1, p)
+    from .regressors import random_states
+
+    Q, QD, QDD, Y = random_states(robot, states, seed)
     data = model.createData()
     W = np.vstack([pin.computeJointTorqueRegressor(model, data, q, qd, qdd) for q, qd, qdd in zip(Q, QD, QDD)])
     T = np.linalg.lstsq(Y, W, rcond=None)[0]

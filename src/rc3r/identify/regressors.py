@@ -65,17 +65,30 @@ def coulomb(qd, v_s: float = 0.0) -> np.ndarray:
     return np.sign(qd) if v_s == 0 else np.tanh(qd / float(v_s))
 
 
-def parse_friction(text) -> tuple[str, ...]:
-    """``"viscous,coulomb"`` (or a sequence) -> ``("viscous", "coulomb")`` in :data:`FRICTION_KINDS` order.
+def parse_friction(text, table=FRICTION_KINDS, what: str = "friction kind") -> tuple[str, ...]:
+    """``"viscous,coulomb"`` (or a sequence) -> ``("viscous", "coulomb")`` in ``table``'s order
+    (:data:`FRICTION_KINDS`, or :data:`JOINT_KINDS` for the controller's joint coefficients).
 
-    ``""`` or ``"none"`` give no friction columns; an unknown kind is a one-line ConfigError.
+    ``""`` or ``"none"`` give no columns; an unknown kind is a one-line ConfigError naming it as ``what``.
     """
     items = [s.strip() for s in (text.split(",") if isinstance(text, str) else text)]
     items = [s for s in items if s and s != "none"]
-    bad = [s for s in items if s not in FRICTION_KINDS]
+    bad = [s for s in items if s not in table]
     if bad:
-        raise ConfigError(f"unknown friction kind(s) {', '.join(bad)} (choose from {', '.join(FRICTION_KINDS)})")
-    return tuple(k for k in FRICTION_KINDS if k in items)
+        raise ConfigError(f"unknown {what}(s) {', '.join(bad)} (choose from {', '.join(table)})")
+    return tuple(k for k in table if k in items)
+
+
+def random_states(robot, states: int | None, seed: int):
+    """``(Q, QD, QDD, Y)``: ``states`` (default ``max(20, 4 p)``) random states of ``robot``
+    (``numpy.random.default_rng(seed)``; ``q`` in [-pi, pi], ``qd``, ``qdd`` in [-3, 3]), each (states, n), and
+    the inverse-dynamics regressor ``Y(q, qd, qd, qdd)`` stacked to (states n, p)."""
+    n, p = robot.n, robot.p
+    states = int(states or max(20, 4 * p))
+    rng = np.random.default_rng(seed)
+    Q = rng.uniform(-np.pi, np.pi, (states, n))
+    QD, QDD = rng.uniform(-3.0, 3.0, (2, states, n))
+    return Q, QD, QDD, np.asarray(robot.regressor(Q, QD, QD, QDD), dtype=float).reshape(-1, p)
 
 
 def friction_names(kinds, n: int) -> tuple[str, ...]:
@@ -141,17 +154,13 @@ def merged_columns(robot, seed: int = 0, states: int | None = None, rtol: float 
     ``states`` random states (``numpy.random.default_rng(seed)``, ``q`` in [-pi, pi], ``qd``, ``qdd`` in
     [-3, 3]): a column whose least-squares distance to the span of ``Y`` is at most ``rtol`` of its norm.
     """
-    n, p = robot.n, robot.p
-    states = int(states or max(20, 4 * p))
-    rng = np.random.default_rng(seed)
-    Q = rng.uniform(-np.pi, np.pi, (states, n))
-    QD, QDD = rng.uniform(-3.0, 3.0, (2, states, n))
-    Y = np.asarray(robot.regressor(Q, QD, QD, QDD), dtype=float).reshape(-1, p)
+    n = robot.n
+    Q, QD, QDD, Y = random_states(robot, states, seed)
     scale = np.linalg.norm(Y, axis=0)
     scale[scale == 0] = 1.0
     out = {}
     for j in range(n):
-        c = np.zeros((states, n))
+        c = np.zeros(QDD.shape)
         c[:, j] = QDD[:, j]
         c = c.ravel()
         coef = np.linalg.lstsq(Y / scale, c, rcond=None)[0]

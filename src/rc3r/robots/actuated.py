@@ -40,7 +40,7 @@ import numpy as np
 
 from .. import _numba_cache
 from ..errors import ConfigError, ParameterError
-from ..identify.regressors import JOINT_KINDS, friction_names, joint_columns
+from ..identify.regressors import JOINT_KINDS, friction_names, joint_columns, parse_friction
 from .base import Robot
 
 __all__ = ["ActuatedRobot", "supply_module", "parse_kinds", "SUPPLY"]
@@ -57,12 +57,7 @@ _MODULES: dict = {}
 def parse_kinds(kinds) -> tuple[str, ...]:
     """``"viscous,coulomb"`` or a sequence -> the kinds in :data:`JOINT_KINDS` order; ConfigError naming an
     unknown one."""
-    items = [s.strip() for s in (kinds.split(",") if isinstance(kinds, str) else kinds)]
-    items = [s for s in items if s and s != "none"]
-    bad = [s for s in items if s not in JOINT_KINDS]
-    if bad:
-        raise ConfigError(f"unknown joint coefficient kind(s) {', '.join(bad)} (choose from {', '.join(JOINT_KINDS)})")
-    return tuple(k for k in JOINT_KINDS if k in items)
+    return parse_friction(kinds, JOINT_KINDS, "joint coefficient kind")
 
 
 class ActuatedRobot(Robot):
