@@ -1,10 +1,12 @@
-"""Which compiled instance a run takes (rc3r.simulate._fast.for_run, plan, instantiate): the law(s) and plant
-effects a run uses, never every registered one (each branch is code numba compiles into every integrator),
-and the arithmetic of a run is the same whichever instance runs it.
+"""Which compiled instance a run takes (rc3r.simulate._fast.for_run, plan, instantiate, loaded): compile once
+per process. Without a plan the first run takes every registered law on its plant's effects, and every later
+run on that plant reuses it (one instance, never one per law); a plan (``rc3r run``: its own law) gives the
+planned laws' instance; an imported instance that covers a run serves it. The arithmetic of a run is the
+same whichever instance runs it.
 
-The codes expected are written here by hand from the law and effect modules (robust 1, fbl 0, adaptive 3;
-friction 1, saturation 2), not read back from the function under test. The suite's own plan (conftest: one
-instance of everything) is lifted in each test (``planned()`` with no law)."""
+The codes expected are written here by hand from the law and effect modules (fbl 0, robust 1, robust-coeff 2,
+adaptive 3, pd 4, pd-plus 5; friction 1, saturation 2), not read back from the function under test. The
+suite's own plan (conftest: one instance of everything) is lifted in each test (``planned()`` with no law)."""
 from __future__ import annotations
 
 import ast
@@ -18,6 +20,7 @@ from rc3r.plants import Friction, Plant, Saturation
 from rc3r.simulate import SimOptions, _fast, simulate
 
 ROBUST, FBL, ADAPTIVE = 1, 0, 3
+EVERY_LAW = (0, 1, 2, 3, 4, 5)
 FRICTION, SATURATION = 1, 2
 RR3 = "rc3r.robots.rr3.engine"
 
@@ -41,29 +44,59 @@ def _branches(mod, name: str) -> list[int]:
                   for c in c.comparators if isinstance(c, ast.Constant))
 
 
-def test_a_run_instance_has_a_branch_for_its_law_and_effects_only(no_plan):
-    """A robust run on a rigid plant: the instance's law dispatch tests code 1 only (no fbl, adaptive,
-    pd, pd-plus branch) and has no effect branch; with friction and saturation the effect dispatch
-    tests exactly codes 1 and 2 (its source file read by ast, an independent reading of the text)."""
+def test_a_planned_run_instance_has_a_branch_for_its_law_and_effects_only(no_plan):
+    """A robust run on a rigid plant under the plan of its own law (what ``rc3r run`` makes): the instance's
+    law dispatch tests code 1 only (no fbl, adaptive, pd, pd-plus branch) and has no effect branch; with
+    friction and saturation the effect dispatch tests exactly codes 1 and 2 (its source file read by ast,
+    an independent reading of the text)."""
     eng = _fast.CompiledSimulator(RR3)
-    rigid = eng.for_run(ROBUST, np.array([0.0]))
+    with _fast.planned([ROBUST], []):
+        rigid = eng.for_run(ROBUST, np.array([0.0]))
     assert rigid.LAW_CODES == (ROBUST,) and rigid.EFFECT_CODES == ()
     assert _branches(rigid, "law_signals") == [ROBUST] and _branches(rigid, "law_jacobian") == [ROBUST]
     arm = rc3r.load_robot()
     fx = Plant(arm, [Friction(viscous=np.full(3, 0.3)), Saturation(limit=np.full(3, 80.0))]).pack()
-    both = eng.for_run(ROBUST, fx)
+    with _fast.planned([ROBUST], [FRICTION, SATURATION]):
+        both = eng.for_run(ROBUST, fx)
     assert both.EFFECT_CODES == (FRICTION, SATURATION)
     effects = __import__("sys").modules[both.actuate.py_func.__module__]
     assert _branches(effects, "damping") == [FRICTION, SATURATION]
     assert both is not rigid and both.__file__ != rigid.__file__
 
 
+def test_without_a_plan_two_laws_on_one_plant_load_one_instance(no_plan):
+    """Compile once per process: with no plan, a robust run then an fbl, an adaptive and a pd run on the same
+    rigid plant take one instance (``loaded`` counts one), the first run's, with a branch for every registered
+    law (its dispatch's tested codes, read by ast) and no effect branch. A plant with friction then takes a
+    second one (other effects: every law on friction), which a later friction run of another law reuses."""
+    eng = _fast.CompiledSimulator(RR3)
+    first = eng.for_run(ROBUST, np.array([0.0]))
+    assert [eng.for_run(c) for c in (FBL, ADAPTIVE, 4)] == [first] * 3
+    assert _fast.loaded(RR3) == (first,)
+    assert first.LAW_CODES == EVERY_LAW and first.EFFECT_CODES == ()
+    assert _branches(first, "law_signals") == list(EVERY_LAW)
+    fx = Plant(rc3r.load_robot(), [Friction(viscous=np.full(3, 0.3))]).pack()
+    rough = eng.for_run(FBL, fx)
+    assert rough is not first and rough.EFFECT_CODES == (FRICTION,) and rough.LAW_CODES == EVERY_LAW
+    assert eng.for_run(ROBUST, fx) is rough and _fast.loaded(RR3) == (first, rough)
+
+
+def test_a_loaded_superset_is_preferred_to_compiling_a_subset(no_plan):
+    """Under a plan of the robust law alone, a robust run still takes the instance of every law already
+    imported (a covering instance costs nothing to load again; compiling the subset would be a second
+    compile in the process)."""
+    eng = _fast.CompiledSimulator(RR3)
+    every = eng.for_run(FBL)
+    with _fast.planned([ROBUST], []):
+        assert eng.for_run(ROBUST) is every
+    assert _fast.loaded(RR3) == (every,)
+
+
 def test_one_file_per_choice_written_once_in_the_package_versions_folder(no_plan, tmp_path, monkeypatch):
     """Two choices of laws are two files side by side in one folder (the package version's: pruning one
     choice never removes another); asking again for a choice imports the same module, its file untouched."""
-    eng = _fast.CompiledSimulator(RR3)
-    a = eng.for_run(ROBUST)
-    b = eng.for_run(FBL)
+    a = _fast.instantiate(RR3, (ROBUST,), ())
+    b = _fast.instantiate(RR3, (FBL,), ())
     assert a is not b and a.__file__ != b.__file__
     assert _fast.Path(a.__file__).parent == _fast.Path(b.__file__).parent
     stamp = _fast.Path(a.__file__).stat().st_mtime_ns
@@ -74,15 +107,15 @@ def test_one_file_per_choice_written_once_in_the_package_versions_folder(no_plan
 
 def test_a_plan_gives_its_laws_one_instance(no_plan):
     """Under a plan of fbl, robust and adaptive (a command that runs several laws), each of those laws'
-    runs takes the one instance of all three; a law outside the plan takes its own; a plant with an
-    effect outside the plan too."""
+    runs takes the one instance of all three; a law outside the plan takes the default (every registered
+    law on the run's effects, here none)."""
     eng = _fast.CompiledSimulator(RR3)
     with _fast.planned([FBL, ROBUST, ADAPTIVE], [FRICTION]):
         inst = eng.for_run(FBL)
         assert inst.LAW_CODES == (FBL, ROBUST, ADAPTIVE) and inst.EFFECT_CODES == (FRICTION,)
         assert eng.for_run(ROBUST) is inst and eng.for_run(ADAPTIVE, np.array([1.0, FRICTION, 3.0])) is inst
         pd = eng.for_run(4)
-        assert pd.LAW_CODES == (4,)
+        assert pd.LAW_CODES == EVERY_LAW and pd.EFFECT_CODES == ()
     assert _fast._PLAN == []  # lifted after the block
 
 
@@ -110,11 +143,50 @@ def test_a_run_gives_the_same_numbers_on_its_own_instance_and_on_everything(no_p
     spec = rc3r.build_run(robot="rr3", controller="robust", perturbed=True, duration=0.05)
     plant = Plant(spec.true_rigid, [Friction(viscous=np.full(3, 0.5))])
     opt = SimOptions(duration=0.05, engine="fast")
-    own = simulate(plant, spec.law, spec.trajectory, opt)
-    assert _fast.simulator(spec.true_rigid).for_run(ROBUST, plant.pack()).LAW_CODES == (ROBUST,)
+    with _fast.planned([ROBUST], [FRICTION]):
+        own = simulate(plant, spec.law, spec.trajectory, opt)
+        assert _fast.simulator(spec.true_rigid).for_run(ROBUST, plant.pack()).LAW_CODES == (ROBUST,)
     _fast._INSTANCES.clear()
     _fast.simulator(spec.true_rigid).instance  # the only one imported now: it covers the run
     assert len(_fast.simulator(spec.true_rigid).for_run(ROBUST, plant.pack()).LAW_CODES) >= 5
     every = simulate(plant, spec.law, spec.trajectory, opt)
     assert own.ok and every.ok
     assert np.array_equal(own.q, every.q) and np.array_equal(own.qd, every.qd) and np.array_equal(own.u, every.u)
+
+
+def _plan_seen_by_rc3r_run(monkeypatch, tmp_path, *argv) -> tuple:
+    """The plan and the imported instances of the 3R's supply when ``rc3r run`` reaches its simulation
+    (its ``execute`` replaced by a probe that records them and stops the command with an error)."""
+    import rc3r.cli.run as cli_run
+    from rc3r.cli import main
+    from rc3r.errors import ConfigError
+
+    seen = []
+
+    def probe(spec):
+        seen.append((list(_fast._PLAN), _fast.loaded(RR3)))
+        raise ConfigError("probe: stop before simulating")
+
+    monkeypatch.setattr(cli_run, "execute", probe)
+    assert main(["run", "--robot", "rr3", "--perturbed", "--engine", "fast", "--duration", "0.01",
+                 "--out", str(tmp_path / "out"), *argv]) != 0
+    assert len(seen) == 1
+    return seen[0]
+
+
+def test_rc3r_run_plans_its_own_law_only(no_plan, monkeypatch, tmp_path):
+    """``rc3r run --controller fbl --friction ...`` in a process with no plan: its run is planned on the fbl
+    law (code 0) and the friction effect (code 1) alone, the one instance imported has exactly those
+    branches (the smallest compile: the first-run time of issue 34), and the plan is lifted afterwards."""
+    plan, inst = _plan_seen_by_rc3r_run(monkeypatch, tmp_path, "--controller", "fbl", "--friction", "0.2:0.1")
+    assert plan == [((FBL,), (FRICTION,))]
+    assert len(inst) == 1 and inst[0].LAW_CODES == (FBL,) and inst[0].EFFECT_CODES == (FRICTION,)
+    assert _fast._PLAN == []
+
+
+def test_rc3r_run_keeps_a_plan_made_before_it(no_plan, monkeypatch, tmp_path):
+    """A process that planned already (a script or a test suite running several commands) keeps its plan
+    through ``rc3r run``: the robust run takes the planned instance of fbl and robust."""
+    with _fast.planned([FBL, ROBUST], []):
+        plan, inst = _plan_seen_by_rc3r_run(monkeypatch, tmp_path, "--controller", "robust")
+        assert plan == [((FBL, ROBUST), ())] and [m.LAW_CODES for m in inst] == [(FBL, ROBUST)]

@@ -12,7 +12,7 @@ from pathlib import Path
 from ..errors import ConfigError, DivergenceError
 from ..io import atomic_savefig, atomic_write_json, atomic_write_text, read_config
 from ..robots import DEFAULT_ROBOT, robot_class
-from ..simulate._fast import simulator
+from ..simulate._fast import effect_codes, planned, simulator
 from ..simulate.metrics import CHATTERING_DEFINITION
 from ..provenance import provenance
 from ..runspec import build_run, execute
@@ -44,6 +44,14 @@ def announce_compile(plant, rate=False, spec=None) -> None:
 
 #: A sampled run on more default sub-steps per period than this says why (:func:`announce_engine`).
 STIFF_NOTE_SUBSTEPS = 16
+
+
+def own_instance(spec) -> tuple[tuple, tuple]:
+    """``(laws, effects)``: the codes of the run's own law and its plant's effects, the plan of ``rc3r run``
+    (:func:`rc3r.simulate._fast.plan`): one law per process, so its compiled instance has the one law's
+    branch, not every registered law's (the library default, ``docs/performance.md``, "Compile instances")."""
+    fx = spec.true_plant.pack() if spec.true_plant is not None else None
+    return ((spec.law.code,) if spec.law.code is not None else ()), effect_codes(fx)
 
 
 def announce_engine(spec) -> str | None:
@@ -178,43 +186,44 @@ def cmd_run(args) -> int:
     warning = design_warning(cfg)
     if warning:
         _progress(warning)
-    engine_note = announce_engine(spec)  # said after a finished run only: a diverged one prints one error line
-    for warning in spec.warnings:
-        _progress(f"rc3r: warning: {warning}")
-    _progress(f"rc3r run: {spec.name}: {describe_model(spec)}; {spec.options.mode}"
-              f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
-              f"{spec.options.duration:g} s, engine {spec.options.engine}"
-              f"{f', then animation.{fmt} ({frame_count(spec.options.duration)} frames)' if fmt else ''} ...")
-    anim_interrupted = False
-    with output_dir(out) as tmp:  # --out checked and locked before simulating
-        res, m = execute(spec)
-        estimate = _estimate(spec, res, m)
-        if fmt and res.outcome != "interrupted":
-            anim_interrupted = not _animate(spec, res, m, tmp / f"animation.{fmt}", out)
-        m["provenance"] = provenance(config=cfg, seed=spec.seed)
-        res.save(tmp, m, spec.name)
-        if estimate is not None:
-            atomic_savefig(estimate, tmp / "estimate.png", dpi=110)
-    if res.outcome == "interrupted":
-        print(f"rc3r: {spec.name} {res.message}: written to {out}/ (metrics.json status 'interrupted')",
-              file=sys.stderr)
-        return EXIT["interrupted"]
-    if anim_interrupted:
-        print(f"rc3r: interrupted while writing the animation: the run is written to {out}/ without it",
-              file=sys.stderr)
-        return EXIT["interrupted"]
-    if engine_note is not None and res.ok:
-        _progress(engine_note)
-    print(f"{verdict_text(m)}: {spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, "
-          f"final bound = {_fmt3(m['final_error_bound'])} rad, chattering = {_fmt3(m['chattering'])} N m/s, "
-          f"wall {m['wall_time_s']:.2f} s -> {out}/")
-    try:
-        res.raise_for_status()
-    except DivergenceError as exc:
-        rate = "HZ" if spec.options.rate is None else f"{spec.options.rate:g}"
-        raise DivergenceError(f"{exc}; data up to then written to {out}/; gains and eps verified for your "
-                              f"controller rate: rc3r design --rate {rate} (docs/design.md)") from None
-    return EXIT["ok"]
+    with planned(*own_instance(spec), keep=True):  # its own law only (the smallest instance), if unplanned
+        engine_note = announce_engine(spec)  # said after a finished run only: a diverged one prints one error line
+        for warning in spec.warnings:
+            _progress(f"rc3r: warning: {warning}")
+        _progress(f"rc3r run: {spec.name}: {describe_model(spec)}; {spec.options.mode}"
+                  f"{'' if spec.options.rate is None else f' at {spec.options.rate:g} Hz'}, "
+                  f"{spec.options.duration:g} s, engine {spec.options.engine}"
+                  f"{f', then animation.{fmt} ({frame_count(spec.options.duration)} frames)' if fmt else ''} ...")
+        anim_interrupted = False
+        with output_dir(out) as tmp:  # --out checked and locked before simulating
+            res, m = execute(spec)
+            estimate = _estimate(spec, res, m)
+            if fmt and res.outcome != "interrupted":
+                anim_interrupted = not _animate(spec, res, m, tmp / f"animation.{fmt}", out)
+            m["provenance"] = provenance(config=cfg, seed=spec.seed)
+            res.save(tmp, m, spec.name)
+            if estimate is not None:
+                atomic_savefig(estimate, tmp / "estimate.png", dpi=110)
+        if res.outcome == "interrupted":
+            print(f"rc3r: {spec.name} {res.message}: written to {out}/ (metrics.json status 'interrupted')",
+                  file=sys.stderr)
+            return EXIT["interrupted"]
+        if anim_interrupted:
+            print(f"rc3r: interrupted while writing the animation: the run is written to {out}/ without it",
+                  file=sys.stderr)
+            return EXIT["interrupted"]
+        if engine_note is not None and res.ok:
+            _progress(engine_note)
+        print(f"{verdict_text(m)}: {spec.name}: max|e| = {_fmt3(m['max_abs_error'])} rad, "
+              f"final bound = {_fmt3(m['final_error_bound'])} rad, chattering = {_fmt3(m['chattering'])} N m/s, "
+              f"wall {m['wall_time_s']:.2f} s -> {out}/")
+        try:
+            res.raise_for_status()
+        except DivergenceError as exc:
+            rate = "HZ" if spec.options.rate is None else f"{spec.options.rate:g}"
+            raise DivergenceError(f"{exc}; data up to then written to {out}/; gains and eps verified for your "
+                                  f"controller rate: rc3r design --rate {rate} (docs/design.md)") from None
+        return EXIT["ok"]
 
 
 def _estimate(spec, res, m: dict):

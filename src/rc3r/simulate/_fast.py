@@ -5,9 +5,15 @@ supply, run in chunks.
 ``(module, kc)`` (contract: :mod:`.engines._template`). :func:`instantiate` writes the source of
 :mod:`.engines.compiled` with its one ``# kernel supply`` import line naming that module and its
 ``# law dispatch`` line replaced by the dispatch over a choice of laws (:mod:`.engines._dispatch`), beside
-the dispatch over a choice of plant effects (:mod:`.engines._effects`): a run takes those of its own law
-and plant (:meth:`CompiledSimulator.for_run`), a command that runs several laws those of its :func:`plan`
-(every branch is code numba compiles into every integrator: ``docs/performance.md``, "Compile time").
+the dispatch over a choice of plant effects (:mod:`.engines._effects`).
+
+**Compile once per process.** Every branch is code numba compiles into every integrator, so the choice
+is what a process will run, and a process never compiles two instances where one would do
+(:meth:`CompiledSimulator.for_run`; ``docs/performance.md``, "Compile instances"): a run takes an
+instance already imported that covers its law and effects (:func:`loaded`; a superset is fine), else its
+process's :func:`plan` if it covers it (``rc3r run`` plans exactly its own law: the smallest instance, the
+first-run compile time; ``rc3r paper``, design and campaigns plan their laws), else the default: every
+registered law on exactly the run's plant effects, which every later run on that plant reuses.
 Each choice is one file, named by a hash of its text (and, for a supply or a law or effect module outside
 rc3r, their sources), in a folder keyed by :func:`rc3r._numba_cache.package_hash`, written atomically
 and only once (the first writer wins, so numba's stamp, the file's time and size, stays valid), and
@@ -51,7 +57,7 @@ from . import status as S
 from .engines import _dispatch
 from .steps import continuous_method, period_budget
 
-__all__ = ["CompiledSimulator", "simulator", "instantiate", "plan", "planned", "effect_codes", "run", "CHUNK_S", "HMAX"]
+__all__ = ["CompiledSimulator", "simulator", "instantiate", "plan", "planned", "loaded", "effect_codes", "run", "CHUNK_S", "HMAX"]
 
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
@@ -153,9 +159,8 @@ def instantiate(module: str, laws=None, effects=None):
     laws, effects : iterable of int, optional
         Codes of registered compiled laws (:data:`rc3r.controllers.LAWS`) and effects
         (:data:`rc3r.plants.EFFECTS`) the instance has a branch for; None (default): every registered one.
-        A run takes the instance of its own law and its plant's effects (:meth:`CompiledSimulator.for_run`):
-        each branch is code numba compiles into every integrator, so an instance of what a run uses
-        compiles in a fraction of the time of one of everything (``docs/performance.md``, "Compile time").
+        Which instance a run takes: :meth:`CompiledSimulator.for_run` (each branch is code numba compiles
+        into every integrator: ``docs/performance.md``, "Compile instances").
 
     Returns
     -------
@@ -266,9 +271,16 @@ class CompiledSimulator:
 
     def for_run(self, law: int, fx=None):
         """The instance a run of the law of code ``law`` on a plant of packed effects ``fx``
-        (:meth:`rc3r.plants.Plant.pack`; None: none) takes: one already imported in this process that has
-        a branch for each of them; else, if the law is in the :func:`planned` set and the effects among
-        its effects, the instance of that set; else :func:`instantiate` of exactly these codes."""
+        (:meth:`rc3r.plants.Plant.pack`; None: none) takes, by the rule "compile once per process"
+        (``docs/performance.md``, "Compile instances"):
+
+        1. an instance already imported in this process (:func:`loaded`) with a branch for the law and
+           each effect (a superset is fine: it costs nothing more to run and nothing to load again);
+        2. else, if the law is in the :func:`planned` set and the effects among its effects, the instance
+           of that set (a command that knows its laws: ``rc3r run`` plans its own law, the smallest instance);
+        3. else the default: :func:`instantiate` of every registered law on exactly the run's effects, so
+           that a later run of another law on the same plant finds it in step 1 (one compile, not one per law).
+        """
         from ..plants import EFFECTS
         from .engines import _effects
 
@@ -276,15 +288,16 @@ class CompiledSimulator:
         laws = {c.code: (c.code, c.name, c.__module__) for c in _dispatch.compiled_laws()}
         effects = {c.code: (c.code, c.name, c.value_kernel, c.slope_kernel)
                    for c in _effects.compiled_effects(EFFECTS)}
-        if int(law) in laws and all(c in effects for c in codes):
-            need_l, need_e = {laws[int(law)]}, {effects[c] for c in codes}
-            for (module, sig, ecodes), mod in _INSTANCES.items():
-                if module == self.module and need_l <= set(sig) and need_e <= set(ecodes):
-                    return mod
+        if int(law) not in laws or any(c not in effects for c in codes):
+            return instantiate(self.module, (int(law),), codes)  # ParameterError naming the code
+        need_l, need_e = {laws[int(law)]}, {effects[c] for c in codes}
+        for (module, sig, ecodes), mod in _INSTANCES.items():
+            if module == self.module and need_l <= set(sig) and need_e <= set(ecodes):
+                return mod
         plan_laws, plan_effects = _PLAN[0] if _PLAN else ((), ())
         if int(law) in plan_laws and set(codes) <= set(plan_effects):
             return instantiate(self.module, plan_laws, plan_effects)
-        return instantiate(self.module, (int(law),), codes)
+        return instantiate(self.module, None, codes)
 
     def constants(self, rigid) -> np.ndarray:
         """The packed constants ``kc`` of ``rigid`` (its ``compiled_kernels`` must name this supply)."""
@@ -353,13 +366,25 @@ def plan(laws=(), effects=()) -> tuple:
 
 
 @contextlib.contextmanager
-def planned(laws=(), effects=()):
-    """:func:`plan` within a ``with`` block; the plan before it is restored after."""
+def planned(laws=(), effects=(), keep: bool = False):
+    """:func:`plan` within a ``with`` block; the plan before it is restored after. ``keep``: a plan already
+    made in this process stands (the caller's, e.g. a test suite's or a script's that runs several commands
+    in one process); ``rc3r run`` plans its own law so."""
+    if keep and _PLAN:
+        yield
+        return
     before = plan(laws, effects)
     try:
         yield
     finally:
         _PLAN[:] = [before] if before else []
+
+
+def loaded(module: str | None = None) -> tuple:
+    """The compiled instances imported in this process (in import order), of the kernel supply ``module``
+    (a dotted name; None: of every supply): each is one instantiation, compiled or loaded from numba's disk
+    cache once per process. The inspectable count behind the rule of :meth:`CompiledSimulator.for_run`."""
+    return tuple(mod for (m, _, _), mod in _INSTANCES.items() if module is None or m == module)
 
 
 def effect_codes(fx) -> tuple[int, ...]:
