@@ -26,7 +26,7 @@ RR3 = "rc3r.robots.rr3.engine"
 
 
 @pytest.fixture
-def no_plan():
+def no_plan_warm():
     """Lift the suite's plan (conftest) and forget the instances this process imported, for one test."""
     saved = dict(_fast._INSTANCES)
     _fast._INSTANCES.clear()
@@ -34,6 +34,13 @@ def no_plan():
         yield
     _fast._INSTANCES.clear()
     _fast._INSTANCES.update(saved)
+
+
+@pytest.fixture
+def no_plan(no_plan_warm, monkeypatch, tmp_path):
+    """:func:`no_plan_warm` and an empty folder of instances (``$NUMBA_CACHE_DIR/rc3r_engines`` read by
+    ``_fast._roots``): no instance is on disk, whatever earlier runs compiled."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
 
 
 def _branches(mod, name: str) -> list[int]:
@@ -92,6 +99,29 @@ def test_a_loaded_superset_is_preferred_to_compiling_a_subset(no_plan):
     assert _fast.loaded(RR3) == (every,)
 
 
+def test_a_choice_compiled_on_disk_is_loaded_instead_of_compiling_the_plan(no_plan, monkeypatch):
+    """Step 2 of the rule: under the plan of the robust law alone (``rc3r run``), a continuous robust run
+    takes the default instance (every law, no effect) if an earlier process left it on disk with its
+    continuous integrator in numba's cache (loading compiles nothing), not a new robust-only compile; if that
+    integrator is not cached, the plan's own instance. numba's answer is replaced by a stub that says
+    "cached" for the default instance's module only (so no compile is needed here)."""
+    from rc3r import _numba_cache
+
+    default = _fast.instantiate(RR3, None, ())  # an earlier process wrote it ...
+    name = default.__name__
+    _fast._INSTANCES.clear()  # ... and this is a new one
+    cached = {"continuous": True}
+    monkeypatch.setattr(_numba_cache, "ready", lambda f: f.py_func.__module__ == name
+                        and cached.get(f.__name__.removeprefix("integrate_"), False))
+    eng = _fast.CompiledSimulator(RR3)
+    with _fast.planned([ROBUST], []):
+        got = eng.for_run(ROBUST, None, "continuous")
+        assert got.__name__ == name and got.LAW_CODES == EVERY_LAW and _fast.loaded(RR3) == (got,)
+        _fast._INSTANCES.clear()
+        own = eng.for_run(ROBUST, None, "sampled")  # its sampled integrator is not cached: compile the plan
+        assert own.LAW_CODES == (ROBUST,) and _fast.loaded(RR3) == (own,)
+
+
 def test_one_file_per_choice_written_once_in_the_package_versions_folder(no_plan, tmp_path, monkeypatch):
     """Two choices of laws are two files side by side in one folder (the package version's: pruning one
     choice never removes another); asking again for a choice imports the same module, its file untouched."""
@@ -136,16 +166,16 @@ def test_an_unregistered_code_is_refused(no_plan):
         _fast.instantiate(RR3, (ROBUST,), (42,))
 
 
-def test_a_run_gives_the_same_numbers_on_its_own_instance_and_on_everything(no_plan):
+def test_a_run_gives_the_same_numbers_on_its_own_instance_and_on_everything(no_plan_warm):
     """The 3R's robust run (continuous, 0.05 s, friction) on its own instance (one law, one effect) and on the
     instance of every law and effect: the same arithmetic, so the same bits (numba compiles without
     fast-math: no reassociation whatever the surrounding code)."""
     spec = rc3r.build_run(robot="rr3", controller="robust", perturbed=True, duration=0.05)
     plant = Plant(spec.true_rigid, [Friction(viscous=np.full(3, 0.5))])
     opt = SimOptions(duration=0.05, engine="fast")
-    with _fast.planned([ROBUST], [FRICTION]):
-        own = simulate(plant, spec.law, spec.trajectory, opt)
-        assert _fast.simulator(spec.true_rigid).for_run(ROBUST, plant.pack()).LAW_CODES == (ROBUST,)
+    _fast.instantiate(RR3, (ROBUST,), (FRICTION,))  # the only one imported: it covers the run
+    own = simulate(plant, spec.law, spec.trajectory, opt)
+    assert _fast.simulator(spec.true_rigid).for_run(ROBUST, plant.pack()).LAW_CODES == (ROBUST,)
     _fast._INSTANCES.clear()
     _fast.simulator(spec.true_rigid).instance  # the only one imported now: it covers the run
     assert len(_fast.simulator(spec.true_rigid).for_run(ROBUST, plant.pack()).LAW_CODES) >= 5

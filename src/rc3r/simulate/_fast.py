@@ -7,12 +7,12 @@ supply, run in chunks.
 ``# law dispatch`` line replaced by the dispatch over a choice of laws (:mod:`.engines._dispatch`), beside
 the dispatch over a choice of plant effects (:mod:`.engines._effects`).
 
-**Compile once per process.** Every branch is code numba compiles into every integrator, so the choice
-is what a process will run, and a process never compiles two instances where one would do
-(:meth:`CompiledSimulator.for_run`; ``docs/performance.md``, "Compile instances"): a run takes an
-instance already imported that covers its law and effects (:func:`loaded`; a superset is fine), else its
-process's :func:`plan` if it covers it (``rc3r run`` plans exactly its own law: the smallest instance, the
-first-run compile time; ``rc3r paper``, design and campaigns plan their laws), else the default: every
+**Compile once per process.** Every branch is code numba compiles into every integrator, so a choice is
+what its process runs, and a process never compiles two instances where one would do
+(:meth:`CompiledSimulator.for_run`; ``docs/performance.md``, "Compile instances"): a run takes an instance
+imported already that covers its law and effects (:func:`loaded`; a superset is fine), else one whose
+integrator numba's disk cache holds, else compiles its process's :func:`plan` (``rc3r run`` plans its own
+law: the smallest instance; ``rc3r paper``, design and campaigns their laws) or the default: every
 registered law on exactly the run's plant effects, which every later run on that plant reuses.
 Each choice is one file, named by a hash of its text (and, for a supply or a law or effect module outside
 rc3r, their sources), in a folder keyed by :func:`rc3r._numba_cache.package_hash`, written atomically
@@ -28,12 +28,11 @@ from what a robot declares (the robot itself knows no simulator).
 
 **Chunks.** The compiled integrators run in chunks of :data:`CHUNK_S` simulated seconds: between two
 chunks control is back in Python, so Ctrl-C or SIGTERM (which the command line turns into
-``KeyboardInterrupt``) stops a long run within one chunk's wall time (about 0.1 s for the
-paper's robust law), and the result keeps every chunk finished before it
-(``status = "interrupted"``). A chunk is also bounded in work: at most
-``SimOptions.max_steps`` integrator steps per simulated second (status ``WORK``, a
-"diverged" run whose message names the law's eps), so a loop too stiff to integrate
-stops within seconds instead of running for hours.
+``KeyboardInterrupt``) stops a long run within one chunk's wall time (about 0.1 s for the paper's robust
+law), and the result keeps every chunk finished before it (``status = "interrupted"``). A chunk is also
+bounded in work: at most ``SimOptions.max_steps`` integrator steps per simulated second (status ``WORK``,
+a "diverged" run whose message names the law's eps), so a loop too stiff to integrate stops within
+seconds instead of running for hours.
 """
 from __future__ import annotations
 
@@ -78,6 +77,9 @@ _TANGENTS = ("tangents_into", "plant_tangents_into")
 
 #: Age [s] past which an instantiation of another package version is removed.
 STALE_S = 86400.0
+
+_INTEGRATORS = {"continuous": ("integrate_continuous",), "sampled": ("integrate_sampled",),  # a run's kind
+                None: ("integrate_continuous", "integrate_sampled")}
 
 _SUPPLY = ("make_work", "regressor_into", "forward_dynamics_into", "passes_into", "xi_into", "apply_into",
            "mass_into")
@@ -145,7 +147,7 @@ def _chosen(registry: list, codes, what: str) -> list:
     return [c for c in registry if int(c.code) in want]
 
 
-def instantiate(module: str, laws=None, effects=None):
+def instantiate(module: str, laws=None, effects=None, *, only_ready=None):
     """The compiled integrators (:mod:`.engines.compiled`) instantiated on the kernel supply ``module``
     (a dotted module name), for the compiled laws of codes ``laws`` (the law dispatch :mod:`.engines._dispatch`
     writes into it) and the plant effects of codes ``effects`` (the dispatch :func:`.engines._effects.source`
@@ -161,10 +163,14 @@ def instantiate(module: str, laws=None, effects=None):
         (:data:`rc3r.plants.EFFECTS`) the instance has a branch for; None (default): every registered one.
         Which instance a run takes: :meth:`CompiledSimulator.for_run` (each branch is code numba compiles
         into every integrator: ``docs/performance.md``, "Compile instances").
+    only_ready : tuple of str, optional
+        Names of integrators (``"integrate_continuous"``, ``"integrate_sampled"``): return the instance only
+        if it is imported already, or its file is on disk and numba's disk cache holds those integrators
+        (:func:`rc3r._numba_cache.ready`: loading it compiles nothing), else None (nothing written).
 
     Returns
     -------
-    module
+    module or None
         The instantiated module (its integrators, ``LAW_CODES`` and ``EFFECT_CODES``).
     """
     from ..plants import EFFECTS
@@ -214,6 +220,8 @@ def instantiate(module: str, laws=None, effects=None):
     stem = module.replace(".", "_")
     effects_name = f"_rc3r_effects_{key}"
     source = source.replace(_effects.MARKER, _effects.MARKER.replace("rc3r.simulate.engines._effects", effects_name))
+    if only_ready is not None:
+        return _ready_on_disk((module, sig, codes), folder, f"{stem}_{key}", effects_name, only_ready)
     errors = []
     for root in _roots():
         path = root / folder / f"{stem}_{key}.py"
@@ -233,8 +241,33 @@ def instantiate(module: str, laws=None, effects=None):
     return mod
 
 
+def _ready_on_disk(ckey: tuple, folder: str, name: str, effects_name: str, which: tuple):
+    """The instance ``ckey`` (files ``name``, ``effects_name`` in ``folder`` of a root) if numba's disk cache
+    holds its integrators ``which`` (kept then as :func:`instantiate`'s), else None (imported, not kept)."""
+    from .._numba_cache import ready
+
+    for root in _roots():
+        path = root / folder / f"{name}.py"
+        if path.is_file() and path.with_name(f"{effects_name}.py").is_file():
+            break
+    else:
+        return None
+    try:
+        if effects_name not in sys.modules:
+            _load(effects_name, path.with_name(f"{effects_name}.py"))
+        mod = _load(f"_rc3r_engine_{name}", path)
+        if not all(ready(getattr(mod, f)) for f in which):
+            return None
+    except Exception:  # noqa: BLE001 - a damaged or half-written file from another process: compile instead
+        return None
+    _INSTANCES[ckey] = mod
+    return mod
+
+
 def _load(name: str, path: Path):
-    """Import the file ``path`` as the module ``name`` (registered in ``sys.modules`` first)."""
+    """Import the file ``path`` as the module ``name`` (registered in ``sys.modules`` first), once."""
+    if getattr(sys.modules.get(name), "__file__", None) == str(path):
+        return sys.modules[name]
     spec = importlib.util.spec_from_file_location(name, path)
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod
@@ -269,17 +302,14 @@ class CompiledSimulator:
         """The instantiated module on every registered law and effect (:func:`instantiate`)."""
         return instantiate(self.module)
 
-    def for_run(self, law: int, fx=None):
-        """The instance a run of the law of code ``law`` on a plant of packed effects ``fx``
-        (:meth:`rc3r.plants.Plant.pack`; None: none) takes, by the rule "compile once per process"
-        (``docs/performance.md``, "Compile instances"):
-
-        1. an instance already imported in this process (:func:`loaded`) with a branch for the law and
-           each effect (a superset is fine: it costs nothing more to run and nothing to load again);
-        2. else, if the law is in the :func:`planned` set and the effects among its effects, the instance
-           of that set (a command that knows its laws: ``rc3r run`` plans its own law, the smallest instance);
-        3. else the default: :func:`instantiate` of every registered law on exactly the run's effects, so
-           that a later run of another law on the same plant finds it in step 1 (one compile, not one per law).
+    def for_run(self, law: int, fx=None, which: str | None = None):
+        """The instance a run of the law of code ``law`` on a plant of packed effects ``fx`` (:meth:`~rc3r.plants.
+        Plant.pack`; None: none) in the ``which`` integrator (``"continuous"``, ``"sampled"``; None: both) takes:
+        (1) an instance imported already with a branch for the law and each effect (a superset is fine);
+        (2) else the first of these choices on disk with that integrator in numba's cache (loading compiles
+        nothing): the :func:`plan` if it covers the run, the default (every registered law on exactly the run's
+        effects), every law on every effect; (3) else the first choice, compiled: the plan, else the default,
+        which later runs of other laws on the plant find in (1) (``docs/performance.md``, "Compile instances").
         """
         from ..plants import EFFECTS
         from .engines import _effects
@@ -295,9 +325,15 @@ class CompiledSimulator:
             if module == self.module and need_l <= set(sig) and need_e <= set(ecodes):
                 return mod
         plan_laws, plan_effects = _PLAN[0] if _PLAN else ((), ())
+        choices = [(None, codes), (None, None)]
         if int(law) in plan_laws and set(codes) <= set(plan_effects):
-            return instantiate(self.module, plan_laws, plan_effects)
-        return instantiate(self.module, None, codes)
+            choices.insert(0, (plan_laws, plan_effects))
+        funcs = _INTEGRATORS.get(which, _INTEGRATORS[None])
+        for laws_, effects_ in choices:
+            mod = instantiate(self.module, laws_, effects_, only_ready=funcs)
+            if mod is not None:
+                return mod
+        return instantiate(self.module, *choices[0])
 
     def constants(self, rigid) -> np.ndarray:
         """The packed constants ``kc`` of ``rigid`` (its ``compiled_kernels`` must name this supply)."""
@@ -318,7 +354,7 @@ class CompiledSimulator:
         from .._numba_cache import ready
 
         try:
-            mod = self.instance if law is None else self.for_run(law, fx)
+            mod = self.instance if law is None else self.for_run(law, fx, which)
             funcs = {"sampled": (mod.integrate_sampled,), "continuous": (mod.integrate_continuous,)}.get(
                 which, (mod.integrate_continuous, mod.integrate_sampled))
         except (AttributeError, ParameterError):
@@ -330,7 +366,7 @@ class CompiledSimulator:
         """``kc``: :meth:`constants` of ``rigid`` if already packed (a run packs them once for all its chunks);
         ``method``: a code of :data:`rc3r.simulate.METHODS` (default 0, ode23s)."""
         kc = self.constants(rigid) if kc is None else kc
-        return self.for_run(code, fx).integrate_continuous(x0, t_out, kc, fx, code, cp, tp, rtol, atol, h0,
+        return self.for_run(code, fx, "continuous").integrate_continuous(x0, t_out, kc, fx, code, cp, tp, rtol, atol, h0,
                                                   hmax, lim, X, U, R, yn, jac_reuse, max_steps, int(method))
 
     def sampled(self, rigid, fx, code, cp, tp, x0, s0, Ts, nsamples, dec, nsub, lim, X, U, R, yn, tv, noise, quant,
@@ -339,7 +375,7 @@ class CompiledSimulator:
         ``nsub`` RK4 sub-steps, 1 by adaptive ROS4 steps and 2 by adaptive RODAS steps (``rtol``, ``atol``, at
         most ``budget`` per period)."""
         kc = self.constants(rigid) if kc is None else kc
-        return self.for_run(code, fx).integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, code, cp,
+        return self.for_run(code, fx, "sampled").integrate_sampled(x0, s0, Ts, nsamples, dec, nsub, kc, fx, code, cp,
                                                tp, lim, X, U, R, yn, tv, noise, quant, ubuf, int(stiff),
                                                float(rtol), float(atol), int(budget))
 
@@ -432,7 +468,8 @@ def run(plant, law, trajectory, opt, x0, loop=None, model=None):
     eng = simulator(rigid)
     n = plant.n
     fx = plant.pack()
-    stale = [e.name for e in plant.packed() if e.code not in eng.for_run(law.code, fx).EFFECT_CODES]
+    which = "continuous" if opt.rate is None else "sampled"
+    stale = [e.name for e in plant.packed() if e.code not in eng.for_run(law.code, fx, which).EFFECT_CODES]
     if stale:  # cannot happen through instantiate (keyed on the registry); a guard for a hand-made instance
         raise ParameterError(f"the compiled engine has no branch for plant effect(s) {', '.join(stale)}")
     kc = eng.constants(rigid)  # once per run (packing the UR5's took 0.4 ms per chunk)
