@@ -25,7 +25,10 @@ from pathlib import Path
 RUN = ("import sys; from rc3r.cli import main; sys.exit(main(['run', '--robot', 'rr3', '--perturbed', "
        "'--controller', 'robust', '--engine', 'fast', '--duration', '1', '--out', sys.argv[1]]))")
 PAPER = "import sys; from rc3r.cli import main; sys.exit(main(['paper', '--out', sys.argv[1]]))"
-COMMANDS = {"run": RUN, "paper": PAPER}
+#: ``rc3r bench``'s compile script (each tree's own): a robust continuous then an fbl sampled run in one
+#: process, no plan (the library default: compile once per process, docs/performance.md "Compile instances").
+STARTUP = "from rc3r.experiments.bench_startup import _COMPILE_SCRIPT as s; exec(s)"
+COMMANDS = {"run": RUN, "paper": PAPER, "startup": STARTUP}
 
 
 def once(tree: Path, command: str = "run") -> tuple[float, float]:
@@ -39,6 +42,8 @@ def once(tree: Path, command: str = "run") -> tuple[float, float]:
         wall = time.perf_counter() - t0
         if done.returncode != 0:
             raise SystemExit(f"first_compile: the run on {tree} failed: {done.stderr.strip().splitlines()[-1:]}")
+        if command == "startup":  # its stages, as rc3r bench's compile row prints them
+            print(f"       {done.stdout.strip().splitlines()[-1]}", flush=True)
         return wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime - before
 
 
@@ -48,7 +53,8 @@ def main(argv=None) -> int:
     ap.add_argument("after", type=Path, help="the tree after the change")
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--command", choices=sorted(COMMANDS), default="run",
-                    help="run: one continuous robust run of the 3R (default); paper: rc3r paper")
+                    help="run: one continuous robust run of the 3R (default); paper: rc3r paper; "
+                         "startup: rc3r bench's compile script (robust continuous, then fbl sampled)")
     args = ap.parse_args(argv)
     got: dict = {"before": [], "after": []}
     for _ in range(args.repeat):
