@@ -14,9 +14,10 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 def _run(name, *args):
-    # 1200 s: with empty caches a script that runs two laws on the UR5 compiles one engine instance per law
-    # (rc3r.simulate._fast.CompiledSimulator.for_run; examples/ur5_payload.py measured 340 s alone, and up to
-    # 600 s at load 6 beside the rest of the suite on 2 cores). A hang still fails, later.
+    # 1200 s: with empty caches examples/ur5_payload.py compiles the UR5's sampled integrator (one instance for
+    # its two laws, rc3r.simulate._fast.CompiledSimulator.for_run): 476 s of wall (220 s CPU) alone at load 11 on
+    # 2 cores on 2026-12-06 (cf4e094: 374 s), up to 600 s at load 6 beside the rest of the suite before. A hang
+    # still fails, later.
     p = subprocess.run([sys.executable, str(EXAMPLES / f"{name}.py"), *args], capture_output=True, text=True,
                        timeout=1200)
     assert p.returncode == 0, p.stderr
