@@ -140,7 +140,8 @@ def best_plain(robot, log):
     for fc, vel, v_s, arm in itertools.product(cutoff_candidates(fs), vels, PLAIN_VS, ("off", "on")):
         with threadpool_limits(limits=1, user_api="blas"):
             res = identify(robot, log, cutoff_hz=fc, velocities=vel, weighting="ordinary", coulomb_velocity=v_s,
-                           armature=arm, test_fraction=TEST_FRACTION, physical=False, consistency=False)
+                           armature=arm, test_fraction=TEST_FRACTION, physical=False, consistency=False,
+                           slow_share=0.0)
         rms = np.asarray(res.validation["rms"])
         label = f"{fc:g} Hz {vel[:4]} v_s={v_s:g} ia={arm}"
         for j in np.nonzero(rms < best)[0]:
