@@ -162,7 +162,7 @@ def _fit(G, b, yy, weighting: str, count=None) -> np.ndarray:
     return x
 
 
-def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS) -> dict:
+def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS, slow=None) -> dict:
     """Blocked cross-validation RMS per joint of a fit of ``y ~ A x`` predicting ``tau`` by ``P x`` (module docstring).
 
     Parameters
@@ -179,6 +179,10 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
         Scored alike on the same folds.
     folds : int
         Contiguous blocks.
+    slow : ndarray of bool (K, n), optional
+        Rows of each joint in the slow regime (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`):
+        a joint's RMS is then the geometric mean of its RMS over its slow rows and over the others (each
+        regime counts alike, whatever its share of the training part).
 
     Returns
     -------
@@ -214,18 +218,23 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
     mid = 0.5 * (cuts[:-1] + cuts[1:])
     fold_of = np.clip(np.searchsorted(edges, tt, side="right") - 1, 0, folds - 1)
     del At
-    sse = {w: np.zeros(n) for w in weightings}
-    rows = 0
+    slow = np.zeros((K, n), dtype=bool) if slow is None else np.asarray(slow, dtype=bool)
+    sse = {w: np.zeros((2, n)) for w in weightings}  # [fast, slow] regimes
+    rows = np.zeros((2, n))
     for i in range(folds):
         use = (mid < edges[i] - guard) | (mid > edges[i + 1] + guard)
         if count[use].sum() * n <= 2 * m:
             return {w: np.full(n, np.inf) for w in weightings}
         val = idx[fold_of == i]
-        rows += val.size
+        sv = slow[val]
+        rows += np.stack([np.sum(~sv, axis=0), np.sum(sv, axis=0)])
         for w in weightings:
             x = _fit(G[use].sum(axis=0), bb[use].sum(axis=0), yy[use].sum(axis=0), w, used[use].sum(axis=0))
-            sse[w] += np.sum((tau[val] - P[val] @ x) ** 2, axis=0)
-    return {w: np.sqrt(sse[w] / rows) for w in weightings}
+            e2 = (tau[val] - P[val] @ x) ** 2
+            sse[w] += np.stack([np.sum(e2 * ~sv, axis=0), np.sum(e2 * sv, axis=0)])
+    both = np.all(rows > 0, axis=0)  # joints with rows in both regimes: geometric mean of the two
+    return {w: np.where(both, np.sqrt(np.sqrt(sse[w][0] / np.maximum(rows[0], 1) * sse[w][1] / np.maximum(rows[1], 1))),
+                        np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0))) for w in weightings}
 
 
 def _score(rms) -> float:
@@ -289,7 +298,7 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         train = (prep.usable & (prep.t <= t_split))[th]
         keep = slow_rows(prep.qd[th], train, slow_share)
         res = cv_scores(A * keep[:, :, None], prep.tau[th] * keep, P, prep.tau_raw[th], prep.t[th], train, fc,
-                        weights, folds)
+                        weights, folds, slow=keep == 0)
         out = []
         for w in weights:
             row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
