@@ -222,7 +222,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
              consistency: bool = True, covariance: str = "in-band", seed: int = 0, weighting: str = "auto",
              coulomb_velocity: float | None = None, folds: int = _sel.FOLDS,
-             physical: bool = True, armature: str = "auto", slow_share: float = _est.SLOW_SHARE) -> Identification:
+             physical: bool = True, armature: str = "auto", slow_share: float = 0.0) -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
 
     Parameters
@@ -269,8 +269,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     physical : bool
         Fit the physically consistent estimate (:func:`rc3r.identify.physical.fit_physical`; SciPy only).
     slow_share : float
-        A joint's rows slower than this x its RMS speed are left out of the fits (reversals, rests:
-        :func:`~rc3r.identify.estimate.slow_rows`); 0 keeps every row.
+        A joint's rows slower than this x its RMS speed (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`)
+        are left out of the fits and scored apart by the cross-validation; 0 (default) keeps every row.
     """
     kinds = tuple(k for k in FRICTION_KINDS if k in tuple(friction))
     if armature not in ARMATURE_CHOICES:

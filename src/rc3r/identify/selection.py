@@ -48,7 +48,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from . import filtering as _flt
-from .estimate import SLOW_SHARE, WEIGHTINGS, slow_rows
+from .estimate import WEIGHTINGS, slow_rows
 from .regressors import coulomb, identification_regressor, joint_columns, kept_columns
 
 __all__ = ["FOLDS", "GUARD", "COULOMB_VELOCITIES", "COULOMB_START", "CV_RATE_FACTOR", "CV_COARSE_FACTOR",
@@ -93,6 +93,11 @@ RULE = "geometric-mean"
 
 #: Search cut-off x source at one ``v_s`` first, then ``v_s`` (True), or every combination (False, the default).
 TWO_STAGE = False
+
+#: How a joint's RMS pools its slow rows (:func:`~rc3r.identify.estimate.slow_rows`) and the others:
+#: ``"balanced"``, the geometric mean of the two regimes' RMS; ``"pooled"``, one RMS over all; ``"fast"``, the
+#: others only.
+SLOW_SCORE = "balanced"
 
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
@@ -233,6 +238,11 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
             e2 = (tau[val] - P[val] @ x) ** 2
             sse[w] += np.stack([np.sum(e2 * ~sv, axis=0), np.sum(e2 * sv, axis=0)])
     both = np.all(rows > 0, axis=0)  # joints with rows in both regimes: geometric mean of the two
+    if SLOW_SCORE == "pooled":
+        return {w: np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0)) for w in weightings}
+    if SLOW_SCORE == "fast":
+        return {w: np.where(rows[0] > 0, np.sqrt(sse[w][0] / np.maximum(rows[0], 1)),
+                            np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0))) for w in weightings}
     return {w: np.where(both, np.sqrt(np.sqrt(sse[w][0] / np.maximum(rows[0], 1) * sse[w][1] / np.maximum(rows[1], 1))),
                         np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0))) for w in weightings}
 
@@ -244,7 +254,7 @@ def _score(rms) -> float:
 
 
 def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, coulomb_velocities,
-           grids=None, folds: int = FOLDS, armature=(False,), merged=(), slow_share: float = SLOW_SHARE) -> dict:
+           grids=None, folds: int = FOLDS, armature=(False,), merged=(), slow_share: float = 0.0) -> dict:
     """Choose cut-off, velocity source, weighting, Coulomb smoothing and armature by cross-validation.
 
     Parameters
@@ -269,7 +279,8 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         :func:`~rc3r.identify.regressors.merged_columns`).
     slow_share : float
         The folds' fits leave out a joint's rows slower than this x its RMS speed, as the final fit does
-        (:func:`~rc3r.identify.estimate.slow_rows`); the blocks' predictions cover every row.
+        (:func:`~rc3r.identify.estimate.slow_rows`; 0: none); the blocks' predictions cover every row, scored
+        per regime (:data:`SLOW_SCORE`).
 
     Returns
     -------
