@@ -113,7 +113,7 @@ def plant_options(args) -> dict:
 def model_friction_config(cfg: dict, args) -> dict:
     """``cfg`` with ``--model-friction`` (if given) as its ``[model] friction``: the option replaces the config's
     value whole (docs/control.md, "Friction with a box or a payload")."""
-    value = getattr(args, "model_friction", None)
+    value = args.model_friction
     if value is None:
         return cfg
     return dict(cfg, model=dict(cfg.get("model", {}), friction=value))
