@@ -140,7 +140,8 @@ def best_plain(robot, log):
     for fc, vel, v_s, arm in itertools.product(cutoff_candidates(fs), vels, PLAIN_VS, ("off", "on")):
         with threadpool_limits(limits=1, user_api="blas"):
             res = identify(robot, log, cutoff_hz=fc, velocities=vel, weighting="ordinary", coulomb_velocity=v_s,
-                           armature=arm, test_fraction=TEST_FRACTION, physical=False, consistency=False)
+                           armature=arm, test_fraction=TEST_FRACTION, physical=False, consistency=False,
+                           slow_share=0.0)
         rms = np.asarray(res.validation["rms"])
         label = f"{fc:g} Hz {vel[:4]} v_s={v_s:g} ia={arm}"
         for j in np.nonzero(rms < best)[0]:
@@ -150,10 +151,11 @@ def best_plain(robot, log):
     return one, one_how, best, how
 
 
-def run_cli(args, log_path, out, arm_args):
-    """``rc3r identify`` with defaults; ``rc3r design --bounds``: (identified.json, wall s, design verdict)."""
+def run_cli(args, log_path, out, arm_args, extra=()):
+    """``rc3r identify`` with defaults (and ``extra`` options); ``rc3r design --bounds``: (identified.json, wall s,
+    design verdict)."""
     t0 = time.perf_counter()
-    subprocess.run(CLI + ["identify", str(log_path), *arm_args, "--test-fraction", str(TEST_FRACTION),
+    subprocess.run(CLI + ["identify", str(log_path), *arm_args, "--test-fraction", str(TEST_FRACTION), *extra,
                           "--out", str(out)], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     wall = time.perf_counter() - t0
     data = json.loads((out / "identified.json").read_text())
@@ -173,47 +175,54 @@ def main(argv=None) -> int:
     ap.add_argument("--design-n", type=int, default=2, help="rc3r design --n (default 2)")
     ap.add_argument("--design-duration", type=float, default=0.5, help="rc3r design --duration (default 0.5)")
     ap.add_argument("--skip-design", action="store_true", help="do not run rc3r design")
+    ap.add_argument("--slow-share", default="0",
+                    help="comma-separated values of identify's --slow-share to measure (default 0: the defaults)")
     args = ap.parse_args(argv)
     from rc3r.identify.log import save_log
 
     print(f"seed {args.seed}; test fraction {TEST_FRACTION}; held-out RMS per joint [N m] against the logged torques")
-    worst = worst_j = 0.0
+    worst, worst_j = {}, {}
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.arms.split(","):
             spec = ARMS[name]
             robot, arm_args, log = make_log(name, spec, args.seed)
             path = Path(tmp) / f"{name}.npz"
             save_log(log, path)
-            data, wall, verdict = run_cli(args, path, Path(tmp) / name, arm_args)
             one, one_how, best, how = best_plain(robot, log)
-            rms = np.asarray(data["validation"]["rms"])
-            prms = np.asarray((data.get("physical") or {}).get("validation", {}).get("rms", rms))
-            sel = data["filter"]
-            arm = data.get("armature") or {}
-            print(f"\n{name}: {log.samples} samples at {1 / spec['period']:g} Hz, velocities "
-                  f"{'logged, ' + format(spec['lag'] * 1e3, 'g') + ' ms late' if spec['velocities'] else 'not logged'}"
-                  f"{', at rest for the last ' + format(spec['rest'], 'g') + ' s' if spec['rest'] else ''}; "
-                  f"identify {wall:.0f} s: {sel['cutoff_hz']:g} Hz, {sel['velocities']}, {sel['weighting']}, "
-                  f"v_s {data['friction_law']['coulomb_velocity']:g}, rotor inertias "
-                  f"{'fitted' if arm.get('fitted') else 'not fitted'}"
-                  + (" (merged: " + ", ".join(f"{a}->{b}" for a, b in arm["merged"].items()) + ")"
-                     if arm.get("merged") else ""))
-            print(f"  best plain OLS fit (lowest geometric mean): {one_how}")
-            print(f"  {'joint':>5} {'default':>8} {'bounds':>8} {'best fit':>8} {'ratio':>6} {'joint min':>9} "
-                  f"{'ratio':>6}  setting of the joint's min")
-            for j in range(robot.n):
-                r, r_j = max(rms[j], prms[j]) / one[j], max(rms[j], prms[j]) / best[j]
-                worst, worst_j = max(worst, r), max(worst_j, r_j)
-                print(f"  {j + 1:>5} {rms[j]:>8.4f} {prms[j]:>8.4f} {one[j]:>8.4f} {r:>6.3f} {best[j]:>9.4f} "
-                      f"{r_j:>6.3f}  {how[j]}")
-            if arm.get("fitted"):
-                print("  rotor inertias [kg m^2]: " + " ".join(f"{x:.3g}" for x in data["physical"]["friction"]
-                                                              ["armature"]) + " (true " +
-                      " ".join(f"{x:g}" for x in spec["armature"]) + ")")
-            print(f"  rc3r design --bounds: {verdict}")
-    print(f"\nworst ratio, any joint, of the default's or the bounds' estimate's RMS: to the best plain OLS fit "
-          f"{worst:.3f} ({'within' if worst <= 1.15 else 'beyond'} 15 %); to the joint's own minimum over every "
-          f"setting {worst_j:.3f} ({'within' if worst_j <= 1.15 else 'beyond'} 15 %)")
+            for share in (float(x) for x in args.slow_share.split(",")):
+                extra = () if share == 0 else ("--slow-share", f"{share:g}")
+                data, wall, verdict = run_cli(args, path, Path(tmp) / f"{name}-{share:g}", arm_args, extra)
+                rms = np.asarray(data["validation"]["rms"])
+                prms = np.asarray((data.get("physical") or {}).get("validation", {}).get("rms", rms))
+                sel = data["filter"]
+                arm = data.get("armature") or {}
+                print(f"\n{name}: {log.samples} samples at {1 / spec['period']:g} Hz, velocities "
+                      f"{'logged, ' + format(spec['lag'] * 1e3, 'g') + ' ms late' if spec['velocities'] else 'not logged'}"
+                      f"{', at rest for the last ' + format(spec['rest'], 'g') + ' s' if spec['rest'] else ''}; "
+                      f"identify{' --slow-share ' + format(share, 'g') if share else ''} {wall:.0f} s: "
+                      f"{sel['cutoff_hz']:g} Hz, {sel['velocities']}, {sel['weighting']}, "
+                      f"v_s {data['friction_law']['coulomb_velocity']:g}, rotor inertias "
+                      f"{'fitted' if arm.get('fitted') else 'not fitted'}"
+                      + (" (merged: " + ", ".join(f"{a}->{b}" for a, b in arm["merged"].items()) + ")"
+                         if arm.get("merged") else ""))
+                print(f"  best plain OLS fit (lowest geometric mean): {one_how}")
+                print(f"  {'joint':>5} {'default':>8} {'bounds':>8} {'best fit':>8} {'ratio':>6} {'joint min':>9} "
+                      f"{'ratio':>6}  setting of the joint's min")
+                for j in range(robot.n):
+                    r, r_j = max(rms[j], prms[j]) / one[j], max(rms[j], prms[j]) / best[j]
+                    worst[share], worst_j[share] = max(worst.get(share, 0.0), r), max(worst_j.get(share, 0.0), r_j)
+                    print(f"  {j + 1:>5} {rms[j]:>8.4f} {prms[j]:>8.4f} {one[j]:>8.4f} {r:>6.3f} {best[j]:>9.4f} "
+                          f"{r_j:>6.3f}  {how[j]}")
+                if arm.get("fitted"):
+                    print("  rotor inertias [kg m^2]: " + " ".join(f"{x:.3g}" for x in data["physical"]["friction"]
+                                                                  ["armature"]) + " (true " +
+                          " ".join(f"{x:g}" for x in spec["armature"]) + ")")
+                print(f"  rc3r design --bounds: {verdict}")
+    for share in worst:
+        print(f"\n--slow-share {share:g}: worst ratio, any joint, of the default's or the bounds' estimate's RMS: to the "
+              f"best plain OLS fit {worst[share]:.3f} ({'within' if worst[share] <= 1.15 else 'beyond'} 15 %); to the "
+              f"joint's own minimum over every setting {worst_j[share]:.3f} "
+              f"({'within' if worst_j[share] <= 1.15 else 'beyond'} 15 %)")
     return 0
 
 

@@ -426,3 +426,41 @@ def test_rc3r_export_of_an_actuated_model_passes_make_check(bounds_file, tmp_pat
     assert main(["export", "--config", str(cfg), "--controller", law, "--out", str(out)]) == 0
     proc = subprocess.run(["make", "-s", "-C", str(out), "check"], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0 and proc.stdout.strip().endswith("ok"), proc.stdout + proc.stderr
+
+
+def test_rc3r_design_with_a_v2_bounds_file_verifies_plants_carrying_its_friction(tmp_path):
+    """``rc3r design --bounds FILE`` with an ``rc3r-bounds/2`` file (the 3R's rigid coefficients 1 %, viscous 2,
+    Coulomb 3, offset 0.5 N m per joint 30 %; written by ``write_bounds``, read back here with ``tomllib``, not
+    ``load_bounds``): the design's ball is the file's full one over rigid **and** joint coefficients (rho 4.4, the
+    Coulomb half-widths, against 1.6 of the rigid projection, computed here from P), and its ``centre`` plant is
+    the file's theta0 with its friction (distance 0 to theta0 in runs.csv; a rigid plant without friction would
+    be ||joint part|| = 6.3 away); every plant drawn lies in the ball (``covered``). 0.2 s runs, 2 draws."""
+    import csv
+    import json
+    import tomllib
+
+    from rc3r.cli import main
+    from rc3r.identify.bounds_file import write_bounds
+
+    arm = load_robot("rr3")
+    joint0 = np.concatenate([np.full(3, 2.0), np.full(3, 3.0), np.full(3, 0.5)])
+    bd = _bounds(arm, KINDS[:3], joint0, rel=0.01)
+    write_bounds(tmp_path / "b.toml", {"confidence": 0.95, "chi2": 1.0, "theta0": bd["theta0"], "P": bd["P"],
+                                       "rho": bd["rho"], "rho_i": bd["rho_i"],
+                                       "actuator": dict(bd["actuator"], quantile=1.0)}, arm, robot_name="rr3")
+    f = tomllib.loads((tmp_path / "b.toml").read_text())
+    assert f["format"] == "rc3r-bounds/2" and f["p"] == 24
+    C = np.linalg.inv(np.array(f["P"]))
+    rho_full, rho_rigid = np.sqrt(np.linalg.eigvalsh(C).max()), np.sqrt(np.linalg.eigvalsh(C[:15, :15]).max())
+    assert rho_full > 2 * rho_rigid
+    out = tmp_path / "d"
+    code = main(["design", "--robot", "rr3", "--bounds", str(tmp_path / "b.toml"), "--rate", "1000", "--n", "2",
+                 "--duration", "0.2", "--workers", "1", "--out", str(out)])
+    assert code == 0
+    model = json.loads((out / "design.json").read_text())["model"]
+    assert model["rho"] == pytest.approx(rho_full, rel=1e-12)
+    rows = [r for r in csv.DictReader((out / "runs.csv").open()) if r["controller"] == "robust"]
+    centre = [r for r in rows if r["plant"] == "-1" and float(r["theta_dist"]) < 1e-9 * np.linalg.norm(f["theta0"])]
+    assert centre and len({r["plant_seed"] for r in rows if r["plant_seed"]}) == 2
+    assert np.linalg.norm(f["theta0"][15:]) == pytest.approx(6.3, abs=0.01)
+    assert all(r["covered"] == "true" and float(r["theta_dist"]) <= rho_full for r in rows)

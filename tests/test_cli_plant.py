@@ -94,3 +94,25 @@ def test_bad_plant_options_are_one_line(argv, what, tmp_path, capsys):
     code, out, err = _run(["run", "--duration", "0.01", "--out", str(tmp_path / "x")] + argv, capsys)
     assert code == 2 and err.count("\n") == 1 and err.startswith("rc3r: error:") and what in err
     assert not (tmp_path / "x").exists()
+
+
+def test_model_friction_option_replaces_the_configs_and_sets_the_ranges(tmp_path, capsys):
+    """``--model-friction`` is ``[model] friction`` from the command line and replaces the config's value whole:
+    with the config's viscous = 5 and the option's viscous = 2, coulomb = 1,2,3 (default range 0.5..1.5), the
+    controller's joint coefficients are the intervals' centres 2 2 2 1 2 3 and its rho_i their half-widths
+    (0.5 x nominal, by hand), not the config's; a bad value is one line and exit 2, before any output."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("perturbed = true\n[model.friction]\nviscous = 5.0\n")
+    base = ["run", "--controller", "robust-coeff", "--duration", "0.01", "--engine", "python", "--config", str(cfg)]
+    code, _, _ = _run(base + ["--model-friction", "viscous=2;coulomb=1,2,3", "--out", str(tmp_path / "a")], capsys)
+    m = _metrics(tmp_path / "a")["model"]
+    nom = [2.0, 2.0, 2.0, 1.0, 2.0, 3.0]
+    assert code == 0 and m["theta0"][15:] == nom
+    np.testing.assert_allclose(m["rho_i"][15:], 0.5 * np.array(nom), rtol=1e-15)
+    code, _, _ = _run(base + ["--out", str(tmp_path / "b")], capsys)  # without the option: the config's
+    assert code == 0 and _metrics(tmp_path / "b")["model"]["theta0"][15:] == [5.0, 5.0, 5.0]
+    for bad, what in (("viscous", "KEY=VALUE"), ("viscous=x", "KEY=VALUE"), ("viscous=-1", ">= 0"),
+                      ("viscous=1;range=1.2,2", "range"), ("stiction=1", "unknown key")):
+        code, out, err = _run(base + ["--model-friction", bad, "--out", str(tmp_path / "x")], capsys)
+        assert code == 2 and err.count("\n") == 1 and err.startswith("rc3r: error:") and what in err, err
+        assert not (tmp_path / "x").exists()

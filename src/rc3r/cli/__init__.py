@@ -120,6 +120,27 @@ def _effect_type(option):
     return parse
 
 
+def _model_friction(text):
+    """``--model-friction``: ``urdf``, or ``KEY=VALUE[;KEY=VALUE...]`` with VALUE ``urdf`` or numbers
+    ``a[,b,...]``: the value of ``[model] friction`` (a table), checked by :func:`rc3r.build_run`."""
+    if text.strip() == "urdf":
+        return "urdf"
+    out = {}
+    for part in (x.strip() for x in text.split(";") if x.strip()):
+        key, sep, value = (x.strip() for x in part.partition("="))
+        try:
+            nums = [float(v) for v in value.split(",")] if value != "urdf" else None
+        except ValueError:
+            nums = []
+        if not sep or not key or nums == [] or key in out:
+            raise argparse.ArgumentTypeError(f"expected urdf or KEY=VALUE[;KEY=VALUE...] (VALUE urdf or numbers "
+                                             f"a,b,...; each KEY once), got {text!r}")
+        out[key] = "urdf" if nums is None else (nums[0] if len(nums) == 1 and key != "range" else nums)
+    if not out:
+        raise argparse.ArgumentTypeError(f"expected urdf or KEY=VALUE[;KEY=VALUE...], got {text!r}")
+    return out
+
+
 def plant_args(p, robot_help: bool = True) -> None:
     """The arm and plant options of run, montecarlo and sweep (docs/control.md, "Plants")."""
     if robot_help:
@@ -142,6 +163,10 @@ def plant_args(p, robot_help: bool = True) -> None:
                         "parameters; for the 3R the consistent arm with Table 1's theta)")
     p.add_argument("--tolerance", type=_positive(), help="tracking tolerance on max|e_j| [rad] of the verdict "
                                                          "(default 0.01)")
+    p.add_argument("--model-friction", type=_model_friction, metavar="urdf|KEY=VALUE;...",
+                   help="joint friction in the controller's model with a range, for box and payload bounds: "
+                        "[model] friction of --config, which this replaces (docs/control.md); e.g. urdf, or "
+                        "'viscous=urdf;coulomb=1,2,3;v_s=0.05;range=0.5,1.5'")
 
 
 def _controllers(text):

@@ -125,13 +125,13 @@ def cmd_design(args) -> int:
     from ..campaign.runner import plan, prepare
     from ..io import read_config
     from ..runspec import build_run
-    from .run import announce_compile, plant_options
+    from .run import announce_compile, model_friction_config, plant_options
 
     if args.scheduler is not None and args.workers is not None:
         raise ConfigError("give --workers or --scheduler, not both")
     if args.payload_com is not None and args.payload is None:
         raise ConfigError("--payload-com needs --payload LO:HI")
-    cfg = {} if args.config is None else read_config(args.config)
+    cfg = model_friction_config({} if args.config is None else read_config(args.config), args)
     opts = plant_options(args)
     cfg = design_config(cfg, robot=args.robot, urdf=opts["urdf"], lock=opts["lock"], payload=args.payload,
                         payload_com=args.payload_com, box=args.box, bounds=args.bounds,

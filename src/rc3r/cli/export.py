@@ -21,9 +21,9 @@ def cmd_export(args) -> int:
     from ..io import read_config
     from ..runspec import build_run
     from ._output import check_output_path, output_dir
-    from .run import plant_options
+    from .run import model_friction_config, plant_options
 
-    cfg = read_config(args.config)
+    cfg = model_friction_config(read_config(args.config), args)
     spec = build_run(robot=args.robot, controller=args.controller, rate=args.rate, eps=args.eps, config=cfg,
                      **plant_options(args))
     from ..runspec import design_unverified, design_warning

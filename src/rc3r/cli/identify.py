@@ -77,6 +77,10 @@ def add_parsers(sub, positive, lock, urdf=str) -> None:
                    help="a rotor inertia per joint (Pinocchio's armature, column qdd_j): auto (default: chosen by "
                         "cross-validation), on or off; a joint whose column the rigid model already holds (joint 1 "
                         "about the gravity axis) is merged into that coefficient, said in identified.json")
+    i.add_argument("--slow-share", type=positive(float, allow_zero=True), default=0.0, metavar="S",
+                   help="leave a joint's rows slower than S x its RMS speed (reversals, rests: stuck Coulomb "
+                        "friction) out of the fits and score them apart in the cross-validation; 0 (default) keeps "
+                        "every row; 0.1 measured in docs/identification.md 2.3")
     i.add_argument("--no-consistency", action="store_true",
                    help="skip the consistency SDP of the unconstrained estimate (cvxpy)")
     i.add_argument("--no-physical", action="store_true",
@@ -143,7 +147,7 @@ def cmd_identify(args) -> int:
                        confidence=args.confidence, velocities=args.velocities,
                        consistency=not args.no_consistency, covariance=args.covariance, seed=args.seed,
                        weighting=args.weighting, coulomb_velocity=args.coulomb_velocity,
-                       physical=not args.no_physical, armature=args.armature)
+                       physical=not args.no_physical, armature=args.armature, slow_share=args.slow_share)
     prov = provenance(seed=args.seed)
     data = res.to_dict() | {"provenance": prov}
     lock = dict(args.lock) if args.lock else {}

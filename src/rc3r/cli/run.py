@@ -118,6 +118,15 @@ def plant_options(args) -> dict:
     return out
 
 
+def model_friction_config(cfg: dict, args) -> dict:
+    """``cfg`` with ``--model-friction`` (if given) as its ``[model] friction``: the option replaces the config's
+    value whole (docs/control.md, "Friction with a box or a payload")."""
+    value = args.model_friction
+    if value is None:
+        return cfg
+    return dict(cfg, model=dict(cfg.get("model", {}), friction=value))
+
+
 def describe_model(spec) -> str:
     """What the plant is and what the controller knows of it, for the run's announcement.
 
@@ -168,7 +177,7 @@ def cmd_run(args) -> int:
     A diverged run writes its data up to the divergence, then raises
     :class:`~rc3r.errors.DivergenceError` (exit 3).
     """
-    cfg = {} if args.config is None else read_config(args.config)
+    cfg = model_friction_config({} if args.config is None else read_config(args.config), args)
     spec = build_run(robot=args.robot, controller=args.controller, perturbed=args.perturbed, plant=args.plant,
                      eps=args.eps, rate=args.rate, duration=args.duration, engine=args.engine, box=args.box,
                      payload=args.payload, payload_com=args.payload_com, config=cfg, **plant_options(args))

@@ -129,9 +129,9 @@ def _config(args) -> dict:
     """The campaign's configuration: --config, then the arm and plant options of the command line on top
     (every job gets them through its configuration: docs/control.md, "Plants")."""
     from ..io import read_config
-    from .run import plant_options
+    from .run import model_friction_config, plant_options
 
-    cfg = {} if args.config is None else read_config(args.config)
+    cfg = model_friction_config({} if args.config is None else read_config(args.config), args)
 
     opts = plant_options(args)
     for key in ("urdf", "tolerance"):

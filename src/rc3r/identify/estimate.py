@@ -69,7 +69,7 @@ from ..errors import ConfigError, ParameterError
 __all__ = ["COND_MAX", "MOTION_MIN", "WEIGHTINGS", "Fit", "ellipsoid_factor", "draw_theta",
            "check_excitation", "weak_columns", "ARMATURE_COND", "spread_ellipsoid",
            "weighted_least_squares", "spectral_covariance", "INFO_SHARE", "in_band_covariance",
-           "dominating", "ellipsoid"]
+           "dominating", "ellipsoid", "SLOW_SHARE", "SLOW_KEEP_MIN", "slow_rows"]
 
 #: Largest condition number of the column-scaled regressor that still counts as full rank.
 COND_MAX = 1e6
@@ -88,6 +88,14 @@ ARMATURE_COND = 1e4
 
 #: A joint whose filtered position range is below this [rad or m] does not move.
 MOTION_MIN = 1e-2
+
+#: A joint's rows where its filtered speed is below this share of its RMS speed over the training rows are left
+#: out of the fit (:func:`slow_rows`): at reversals and rests a Coulomb joint sticks and its friction is any value
+#: in ``[-f_c, f_c]``, which no smooth law of ``qd`` models. A sinusoidal joint spends 4.5 % of its time there.
+SLOW_SHARE = 0.1
+
+#: A joint that would keep less than this share of its training rows keeps them all (a joint that mostly rests).
+SLOW_KEEP_MIN = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -195,6 +203,38 @@ def weak_columns(A, candidates, cond_max: float = None) -> dict:
         keep.pop(i)
 
 
+def slow_rows(qd, rows, share: float = SLOW_SHARE) -> np.ndarray:
+    """Per-joint weights (K, n) of 0 or 1: 0 where joint ``j``'s speed is below ``share`` x its RMS over ``rows``.
+
+    Parameters
+    ----------
+    qd : ndarray (K, n)
+        Filtered joint velocities [rad/s or m/s] of the rows.
+    rows : ndarray of bool (K,)
+        The rows whose RMS speed sets the threshold (the training part).
+    share : float
+        :data:`SLOW_SHARE`; 0 keeps every row. A joint that would keep less than :data:`SLOW_KEEP_MIN` of
+        ``rows`` keeps every row.
+
+    Returns
+    -------
+    ndarray (K, n)
+        1.0 for a row of a joint the fit uses, 0.0 for one it leaves out (the row ``j`` of ``A`` and ``y``
+        is multiplied by it).
+    """
+    if not (np.isfinite(share) and 0.0 <= share < 1.0):
+        raise ConfigError(f"slow share must be in [0, 1) (a share of a joint's RMS speed), got {share:g}")
+    qd = np.abs(np.asarray(qd, dtype=float))
+    keep = np.ones(qd.shape)
+    if share <= 0:
+        return keep
+    rms = np.sqrt(np.mean(qd[rows] ** 2, axis=0))
+    slow = qd < share * rms[None, :]
+    use = np.mean(~slow[rows], axis=0) >= SLOW_KEEP_MIN
+    keep[:, use] = np.where(slow[:, use], 0.0, 1.0)
+    return keep
+
+
 def _lstsq(A, y, w):
     """Weighted least squares of (N, n, m) A, (N, n) y with per-joint weights w (n,): (x, H^{-1}, scale, cond).
 
@@ -216,7 +256,7 @@ def _lstsq(A, y, w):
 
 
 def weighted_least_squares(A, y, gain: float = 1.0, step: int = 1, iterations: int = 2,
-                           weighting: str = "per-joint") -> Fit:
+                           weighting: str = "per-joint", kept=None) -> Fit:
     """Fit ``y`` (N, n) by ``A`` (N, n, m) (module docstring: weights, noise).
 
     The covariance is the white-noise one, ``(sigma^2 / D)``-scaled ``H^{-1}`` (per-joint weights) or
@@ -235,16 +275,19 @@ def weighted_least_squares(A, y, gain: float = 1.0, step: int = 1, iterations: i
         Re-weightings after the ordinary fit (``weighting="per-joint"`` only).
     weighting : str
         ``"per-joint"`` (weights ``1/sigma_j``) or ``"ordinary"`` (all 1), :data:`WEIGHTINGS`.
+    kept : ndarray (n,), optional
+        Share of each joint's rows that are not zeroed (:func:`slow_rows`): ``sigma_j`` counts only those.
     """
     A = np.asarray(A, dtype=float)
     y = np.asarray(y, dtype=float)
     N, n, m = A.shape
+    kept = np.ones(n) if kept is None else np.asarray(kept, dtype=float)
     if weighting not in WEIGHTINGS:
         raise ConfigError(f"weighting must be one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
     if N * n <= m:
         raise ConfigError(f"too few samples: {N} rows x {n} joints for {m} unknowns")
-    dof = N * gain - m / (n * step)
-    if dof <= 0:
+    dof = kept * N * gain - m / (n * step)
+    if np.any(dof <= 0):
         raise ConfigError(f"too few samples: {N} rows for {m} unknowns after filtering")
     w = np.ones(n)
     for _ in range(iterations + 1 if weighting == "per-joint" else 0):
@@ -296,7 +339,7 @@ def spectral_covariance(A, w, rate: float, density) -> np.ndarray:
     return 0.5 * (cov + cov.T)
 
 
-def in_band_covariance(A, w, e, rate: float, fs: float, fc: float, share: float = INFO_SHARE) -> dict:
+def in_band_covariance(A, w, e, rate: float, fs: float, fc: float, share: float = INFO_SHARE, kept=None) -> dict:
     r"""The sandwich covariance with each joint's noise level measured where the estimate's information is.
 
     The filtered residual's spectrum is not flat inside the pass band: errors in the variables
@@ -316,12 +359,14 @@ def in_band_covariance(A, w, e, rate: float, fs: float, fc: float, share: float 
 
     Returns ``cov`` (m, m), ``sigma`` (n,) (white-equivalent per-sample level at ``fs`` [unit]),
     ``band_hz`` (``f_top``) and ``dof`` (``2 f_top T`` per joint minus the information absorbed: the
-    F quantile's ``nu``).
+    F quantile's ``nu``). ``kept`` (n,): the share of each joint's rows that are not zeroed
+    (:func:`slow_rows`); the noise of joint ``j`` is present on that share of the rows only.
     """
     from .filtering import power_response
 
     A = np.asarray(A, dtype=float)
     N, n, m = A.shape
+    kept = np.ones(n) if kept is None else np.asarray(kept, dtype=float)
     w = np.asarray(w, dtype=float)
     Z = A * w[None, :, None]
     r = np.asarray(e, dtype=float) * w[None, :]
@@ -349,7 +394,7 @@ def in_band_covariance(A, w, e, rate: float, fs: float, fc: float, share: float 
     X, q, absorbed = np.zeros((n, n)), np.zeros(n), 0.0
     for j in range(n):
         Gb = gram(j, b.astype(float))
-        X[j, j] += (N / M) * np.sum(wt[b] * L2[b]) - 2.0 * np.trace(Hi @ gram(j, b * L2))
+        X[j, j] += kept[j] * (N / M) * np.sum(wt[b] * L2[b]) - 2.0 * np.trace(Hi @ gram(j, b * L2))
         HGH = Hi @ Gb @ Hi
         X[j] += [np.sum(HGH * G[i]) for i in range(n)]
         q[j] = np.sum(wt[b] * R[b, j]) / M
@@ -358,7 +403,7 @@ def in_band_covariance(A, w, e, rate: float, fs: float, fc: float, share: float 
     c = np.maximum(c, 1e-24 * max(1.0, float(np.max(np.abs(c)))))
     cov = Hi @ sum(c[i] * G[i] for i in range(n)) @ Hi / np.outer(scale, scale)
     return {"cov": 0.5 * (cov + cov.T), "sigma": np.sqrt(c * fs / 2.0) / w, "band_hz": top,
-            "dof": n * 2.0 * top * N / rate - absorbed}
+            "dof": float(np.sum(kept)) * 2.0 * top * N / rate - absorbed}
 
 
 def dominating(C1, C2) -> np.ndarray:

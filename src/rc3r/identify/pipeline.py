@@ -222,7 +222,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
              consistency: bool = True, covariance: str = "in-band", seed: int = 0, weighting: str = "auto",
              coulomb_velocity: float | None = None, folds: int = _sel.FOLDS,
-             physical: bool = True, armature: str = "auto") -> Identification:
+             physical: bool = True, armature: str = "auto", slow_share: float = 0.0) -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
 
     Parameters
@@ -268,6 +268,9 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         (:func:`~rc3r.identify.regressors.merged_columns`).
     physical : bool
         Fit the physically consistent estimate (:func:`rc3r.identify.physical.fit_physical`; SciPy only).
+    slow_share : float
+        A joint's rows slower than this x its RMS speed (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`)
+        are left out of the fits and scored apart by the cross-validation; 0 (default) keeps every row.
     """
     kinds = tuple(k for k in FRICTION_KINDS if k in tuple(friction))
     if armature not in ARMATURE_CHOICES:
@@ -315,7 +318,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     sel = None
     if max(len(cutoffs), len(vels), len(weights), len(v_cands), len(arm_opts)) > 1:
         sel = _sel.select(robot, log, kinds, t_split, cutoffs, vels, weights, v_cands, grids=grids, folds=folds,
-                          armature=arm_opts, merged=tuple(merged))
+                          armature=arm_opts, merged=tuple(merged), slow_share=slow_share)
         c = sel["chosen"]
         fc, vel, wgt, v_s, arm = (c["cutoff_hz"], c["velocities"], c["weighting"], c["coulomb_velocity"],
                                   c["armature"])
@@ -325,6 +328,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     prep = _flt.prepare(log, fc, vel, grids=grids)
     train = prep.usable & (prep.t <= t_split)
     test = prep.usable & (prep.t > t_split)
+    keep = _est.slow_rows(prep.qd, train, slow_share)[train]  # (rows of train, n): 0 at reversals and rests
     if not test.any():
         raise ConfigError(f"no held-out samples: the last {test_fraction:g} of the log lies in the filter's "
                           f"start-up ({_flt.EDGE / fc:.3g} s); give a longer log or a larger --test-fraction")
@@ -338,7 +342,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         names = tuple(robot.coefficient_names) + tuple(all_names[c] for c in cols)
         if arm:  # rotor inertias nearly confounded with a rigid coefficient on this log: merged, not fitted
             ia = [robot.p + i for i, c in enumerate(cols) if all_names[c].startswith("ia")]
-            weak = _est.weak_columns(A[train], ia)
+            weak = _est.weak_columns(A[train] * keep[:, :, None], ia)
             if weak:
                 partner |= {int(names[k][2:]) - 1: names[w] for k, w in weak.items()}
                 merged = dict(merged) | {int(names[k][2:]) - 1: w for k, w in weak.items()}
@@ -346,7 +350,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
                 A = _filtered_rows(robot, prep, kinds_all, v_s, cols)
                 names = tuple(robot.coefficient_names) + tuple(all_names[c] for c in cols)
         try:
-            _est.check_excitation(A[train], names, prep.q[train])
+            _est.check_excitation(A[train] * keep[:, :, None], names, prep.q[train])
             break
         except ConfigError as exc:
             if not (arm and armature == "auto"):
@@ -361,8 +365,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
                            "fitted: their rotor inertia is part of the named rigid coefficient; or, on this log, "
                            "nearly confounded with the named coefficient (column-scaled condition number above "
                            "estimate.ARMATURE_COND)"}
-    fit = _est.weighted_least_squares(A[train], prep.tau[train], gain=prep.noise_gain, step=prep.step,
-                                      weighting=wgt)
+    A_tr, y_tr, kept = A[train] * keep[:, :, None], prep.tau[train] * keep, keep.mean(axis=0)
+    fit = _est.weighted_least_squares(A_tr, y_tr, gain=prep.noise_gain, step=prep.step, weighting=wgt, kept=kept)
     # the unfiltered residual at the training stamps (evenly thinned): its spectrum sets the covariance
     edge = _flt.EDGE / fc
     ok = (log.t >= t0 + edge) & (log.t <= grid[-1] - edge)
@@ -373,9 +377,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
                                  - _raw_rows(robot, prep, log.t[tr_idx], kinds_all, True, v_s, cols) @ fit.x)
                                 ** 2, axis=0))
     density = _flt.residual_density(log.t[tr_idx], raw_res, fc, prep.fs)
-    parts = {"white": fit.cov, "spectral": _est.spectral_covariance(A[train], fit.weights, prep.fs_coarse, density)}
-    inband = _est.in_band_covariance(A[train], fit.weights, prep.tau[train] - A[train] @ fit.x, prep.fs_coarse,
-                                     prep.fs, fc)
+    parts = {"white": fit.cov, "spectral": _est.spectral_covariance(A_tr, fit.weights, prep.fs_coarse, density)}
+    inband = _est.in_band_covariance(A_tr, fit.weights, y_tr - A_tr @ fit.x, prep.fs_coarse, prep.fs, fc, kept=kept)
     parts["in-band"] = inband["cov"]
     nu = robot.n * _flt.effective_dof(int(fit.rows), prep.fs_coarse, fc) - len(names)
     if covariance == "robust":
@@ -411,7 +414,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
             "rate_hz": fs, "coarse_rate_hz": prep.fs_coarse, "velocities": prep.velocities,
             "velocities_chosen": "cross-validation" if len(vels) > 1 else
             ("given (--velocities)" if velocities != "auto" else "not logged"),
-            "weighting": wgt, "weighting_chosen": "cross-validation" if len(weights) > 1 else "given (--weighting)"}
+            "weighting": wgt, "weighting_chosen": "cross-validation" if len(weights) > 1 else "given (--weighting)",
+            "slow_share": float(slow_share), "rows_kept": kept.tolist()}
     law = {"coulomb": COULOMB_LAW, "coulomb_velocity": float(v_s),
            "chosen": "cross-validation" if len(v_cands) > 1 else
            ("given (--coulomb-velocity)" if coulomb_velocity is not None else "no Coulomb term")}

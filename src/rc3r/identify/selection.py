@@ -48,7 +48,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from . import filtering as _flt
-from .estimate import WEIGHTINGS
+from .estimate import WEIGHTINGS, slow_rows
 from .regressors import coulomb, identification_regressor, joint_columns, kept_columns
 
 __all__ = ["FOLDS", "GUARD", "COULOMB_VELOCITIES", "COULOMB_START", "CV_RATE_FACTOR", "CV_COARSE_FACTOR",
@@ -93,6 +93,11 @@ RULE = "geometric-mean"
 
 #: Search cut-off x source at one ``v_s`` first, then ``v_s`` (True), or every combination (False, the default).
 TWO_STAGE = False
+
+#: How a joint's RMS pools its slow rows (:func:`~rc3r.identify.estimate.slow_rows`) and the others:
+#: ``"balanced"``, the geometric mean of the two regimes' RMS; ``"pooled"``, one RMS over all; ``"fast"``, the
+#: others only.
+SLOW_SCORE = "balanced"
 
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
@@ -146,21 +151,23 @@ def _solve(G, b, w) -> np.ndarray:
         return np.linalg.lstsq(H / np.outer(d, d), r / d, rcond=None)[0] / d
 
 
-def _fit(G, b, yy, weighting: str) -> np.ndarray:
-    """The fit of :func:`~rc3r.identify.estimate.weighted_least_squares` from per-joint sums."""
+def _fit(G, b, yy, weighting: str, count=None) -> np.ndarray:
+    """The fit of :func:`~rc3r.identify.estimate.weighted_least_squares` from per-joint sums (``count`` (n,):
+    each joint's rows used, whose residual sets its weight)."""
     n = G.shape[0]
     w = np.ones(n)
     x = _solve(G, b, w)
+    count = np.ones(n) if count is None else np.maximum(np.asarray(count, dtype=float), 1.0)
     if weighting == "per-joint":
         for _ in range(ITERATIONS + 1):
             rss = yy - 2.0 * np.einsum("jk,k->j", b, x) + np.einsum("k,jkl,l->j", x, G, x)
-            sig = np.sqrt(np.maximum(rss, 1e-300))
+            sig = np.sqrt(np.maximum(rss, 1e-300) / count)
             w = 1.0 / np.maximum(sig, 1e-12 * max(1.0, float(sig.max())))
             x = _solve(G, b, w)
     return x
 
 
-def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS) -> dict:
+def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS, slow=None) -> dict:
     """Blocked cross-validation RMS per joint of a fit of ``y ~ A x`` predicting ``tau`` by ``P x`` (module docstring).
 
     Parameters
@@ -177,6 +184,10 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
         Scored alike on the same folds.
     folds : int
         Contiguous blocks.
+    slow : ndarray of bool (K, n), optional
+        Rows of each joint in the slow regime (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`):
+        a joint's RMS is then the geometric mean of its RMS over its slow rows and over the others (each
+        regime counts alike, whatever its share of the training part).
 
     Returns
     -------
@@ -195,6 +206,7 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
     G = np.zeros((S, n, m, m))
     bb = np.zeros((S, n, m))
     yy = np.zeros((S, n))
+    used = np.zeros((S, n))  # a joint's rows used in each segment (rows zeroed by slow_rows are not)
     count = stops - starts
     At = np.ascontiguousarray(np.moveaxis(A[idx], 1, 0))  # (n, N, m): one contiguous block per joint
     yt = np.ascontiguousarray(y[idx].T)
@@ -207,21 +219,32 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
                 G[s, j][np.ix_(nz, nz)] = Aj[a:b].T @ Aj[a:b]
                 bb[s, j, nz] = Aj[a:b].T @ yt[j, a:b]
                 yy[s, j] = yt[j, a:b] @ yt[j, a:b]
+                used[s, j] = np.count_nonzero(np.any(Aj[a:b] != 0.0, axis=1))
     mid = 0.5 * (cuts[:-1] + cuts[1:])
     fold_of = np.clip(np.searchsorted(edges, tt, side="right") - 1, 0, folds - 1)
     del At
-    sse = {w: np.zeros(n) for w in weightings}
-    rows = 0
+    slow = np.zeros((K, n), dtype=bool) if slow is None else np.asarray(slow, dtype=bool)
+    sse = {w: np.zeros((2, n)) for w in weightings}  # [fast, slow] regimes
+    rows = np.zeros((2, n))
     for i in range(folds):
         use = (mid < edges[i] - guard) | (mid > edges[i + 1] + guard)
         if count[use].sum() * n <= 2 * m:
             return {w: np.full(n, np.inf) for w in weightings}
         val = idx[fold_of == i]
-        rows += val.size
+        sv = slow[val]
+        rows += np.stack([np.sum(~sv, axis=0), np.sum(sv, axis=0)])
         for w in weightings:
-            x = _fit(G[use].sum(axis=0), bb[use].sum(axis=0), yy[use].sum(axis=0), w)
-            sse[w] += np.sum((tau[val] - P[val] @ x) ** 2, axis=0)
-    return {w: np.sqrt(sse[w] / rows) for w in weightings}
+            x = _fit(G[use].sum(axis=0), bb[use].sum(axis=0), yy[use].sum(axis=0), w, used[use].sum(axis=0))
+            e2 = (tau[val] - P[val] @ x) ** 2
+            sse[w] += np.stack([np.sum(e2 * ~sv, axis=0), np.sum(e2 * sv, axis=0)])
+    both = np.all(rows > 0, axis=0)  # joints with rows in both regimes: geometric mean of the two
+    if SLOW_SCORE == "pooled":
+        return {w: np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0)) for w in weightings}
+    if SLOW_SCORE == "fast":
+        return {w: np.where(rows[0] > 0, np.sqrt(sse[w][0] / np.maximum(rows[0], 1)),
+                            np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0))) for w in weightings}
+    return {w: np.where(both, np.sqrt(np.sqrt(sse[w][0] / np.maximum(rows[0], 1) * sse[w][1] / np.maximum(rows[1], 1))),
+                        np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0))) for w in weightings}
 
 
 def _score(rms) -> float:
@@ -231,7 +254,7 @@ def _score(rms) -> float:
 
 
 def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, coulomb_velocities,
-           grids=None, folds: int = FOLDS, armature=(False,), merged=()) -> dict:
+           grids=None, folds: int = FOLDS, armature=(False,), merged=(), slow_share: float = 0.0) -> dict:
     """Choose cut-off, velocity source, weighting, Coulomb smoothing and armature by cross-validation.
 
     Parameters
@@ -254,6 +277,10 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     merged : sequence of int
         Joints (0-based) whose armature column is in the rigid regressor's span (not fitted:
         :func:`~rc3r.identify.regressors.merged_columns`).
+    slow_share : float
+        The folds' fits leave out a joint's rows slower than this x its RMS speed, as the final fit does
+        (:func:`~rc3r.identify.estimate.slow_rows`; 0: none); the blocks' predictions cover every row, scored
+        per regime (:data:`SLOW_SCORE`).
 
     Returns
     -------
@@ -280,7 +307,9 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         qp, qdp, qddp = (X[th] for X in prep.predict)
         P = np.concatenate([PY, joint_columns(qdp, qddp, ks, v_s)[:, :, cols]], axis=2)
         train = (prep.usable & (prep.t <= t_split))[th]
-        res = cv_scores(A, prep.tau[th], P, prep.tau_raw[th], prep.t[th], train, fc, weights, folds)
+        keep = slow_rows(prep.qd[th], train, slow_share)
+        res = cv_scores(A * keep[:, :, None], prep.tau[th] * keep, P, prep.tau_raw[th], prep.t[th], train, fc,
+                        weights, folds, slow=keep == 0)
         out = []
         for w in weights:
             row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
