@@ -428,6 +428,7 @@ def test_rc3r_export_of_an_actuated_model_passes_make_check(bounds_file, tmp_pat
     assert proc.returncode == 0 and proc.stdout.strip().endswith("ok"), proc.stdout + proc.stderr
 
 
+@pytest.mark.slow  # about 60 s of CPU (a design of its own), 8 min wall on a loaded machine
 def test_rc3r_design_with_a_v2_bounds_file_verifies_plants_carrying_its_friction(tmp_path):
     """``rc3r design --bounds FILE`` with an ``rc3r-bounds/2`` file (the 3R's rigid coefficients 1 %, viscous 2,
     Coulomb 3, offset 0.5 N m per joint 30 %; written by ``write_bounds``, read back here with ``tomllib``, not
@@ -437,7 +438,7 @@ def test_rc3r_design_with_a_v2_bounds_file_verifies_plants_carrying_its_friction
     be ||joint part|| = 6.3 away); every plant drawn lies in the ball (``covered``). 0.2 s runs, 2 draws."""
     import csv
     import json
-    import tomllib
+    from rc3r.io import tomllib  # tomli on Python 3.10
 
     from rc3r.cli import main
     from rc3r.identify.bounds_file import write_bounds
