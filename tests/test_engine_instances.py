@@ -1,6 +1,6 @@
 """Which compiled instance a run takes (rc3r.simulate._fast.for_run, plan, instantiate, loaded): compile once
-per process. Without a plan the first run takes every registered law on its plant's effects, and every later
-run on that plant reuses it (one instance, never one per law); a plan (``rc3r run``: its own law) gives the
+per process where one will do. Without a plan the first run on a plant's effects takes its law and FBL, a run
+of a law it lacks every registered law (at most two instances per plant, never one per law); a plan (``rc3r run``: its own law) gives the
 planned laws' instance; an imported instance that covers a run serves it. The arithmetic of a run is the
 same whichever instance runs it.
 
@@ -71,37 +71,43 @@ def test_a_planned_run_instance_has_a_branch_for_its_law_and_effects_only(no_pla
     assert both is not rigid and both.__file__ != rigid.__file__
 
 
-def test_without_a_plan_two_laws_on_one_plant_load_one_instance(no_plan):
-    """Compile once per process: with no plan, a robust run then an fbl, an adaptive and a pd run on the same
-    rigid plant take one instance (``loaded`` counts one), the first run's, with a branch for every registered
-    law (its dispatch's tested codes, read by ast) and no effect branch. A plant with friction then takes a
-    second one (other effects: every law on friction), which a later friction run of another law reuses."""
+def test_without_a_plan_a_process_compiles_at_most_two_instances_per_plant(no_plan):
+    """With no plan, a robust run then an fbl run on a rigid plant take one instance (``loaded`` counts one):
+    the run's law and FBL, the baseline every comparison runs against (its dispatch's tested codes, read by
+    ast: 0 and 1 only). An adaptive run, which it lacks, takes a second instance of every registered law and
+    no effect, which a pd run then reuses (two instances, never one per law). On a plant with friction the
+    same: an fbl run takes FBL alone on friction, a robust run then every law on friction, reused after."""
     eng = _fast.CompiledSimulator(RR3)
     first = eng.for_run(ROBUST, np.array([0.0]))
-    assert [eng.for_run(c) for c in (FBL, ADAPTIVE, 4)] == [first] * 3
-    assert _fast.loaded(RR3) == (first,)
-    assert first.LAW_CODES == EVERY_LAW and first.EFFECT_CODES == ()
-    assert _branches(first, "law_signals") == list(EVERY_LAW)
+    assert eng.for_run(FBL) is first and _fast.loaded(RR3) == (first,)
+    assert first.LAW_CODES == (FBL, ROBUST) and first.EFFECT_CODES == ()
+    assert _branches(first, "law_signals") == [FBL, ROBUST]
+    every = eng.for_run(ADAPTIVE)
+    assert every.LAW_CODES == EVERY_LAW and every.EFFECT_CODES == ()
+    assert _branches(every, "law_signals") == list(EVERY_LAW)
+    assert eng.for_run(4) is every and _fast.loaded(RR3) == (first, every)
     fx = Plant(rc3r.load_robot(), [Friction(viscous=np.full(3, 0.3))]).pack()
     rough = eng.for_run(FBL, fx)
-    assert rough is not first and rough.EFFECT_CODES == (FRICTION,) and rough.LAW_CODES == EVERY_LAW
-    assert eng.for_run(ROBUST, fx) is rough and _fast.loaded(RR3) == (first, rough)
+    assert rough.EFFECT_CODES == (FRICTION,) and rough.LAW_CODES == (FBL,)
+    rough_every = eng.for_run(ROBUST, fx)
+    assert rough_every.EFFECT_CODES == (FRICTION,) and rough_every.LAW_CODES == EVERY_LAW
+    assert eng.for_run(ADAPTIVE, fx) is rough_every and len(_fast.loaded(RR3)) == 4
 
 
 def test_a_loaded_superset_is_preferred_to_compiling_a_subset(no_plan):
-    """Under a plan of the robust law alone, a robust run still takes the instance of every law already
+    """Under a plan of the robust law alone, a robust run still takes the instance of robust and fbl already
     imported (a covering instance costs nothing to load again; compiling the subset would be a second
     compile in the process)."""
     eng = _fast.CompiledSimulator(RR3)
-    every = eng.for_run(FBL)
+    pair = eng.for_run(ROBUST)  # without a plan: robust and fbl
     with _fast.planned([ROBUST], []):
-        assert eng.for_run(ROBUST) is every
-    assert _fast.loaded(RR3) == (every,)
+        assert eng.for_run(ROBUST) is pair
+    assert _fast.loaded(RR3) == (pair,) and pair.LAW_CODES == (FBL, ROBUST)
 
 
 def test_a_choice_compiled_on_disk_is_loaded_instead_of_compiling_the_plan(no_plan, monkeypatch):
     """Step 2 of the rule: under the plan of the robust law alone (``rc3r run``), a continuous robust run
-    takes the default instance (every law, no effect) if an earlier process left it on disk with its
+    takes the instance of every law on its effects (none) if an earlier process left it on disk with its
     continuous integrator in numba's cache (loading compiles nothing), not a new robust-only compile; if that
     integrator is not cached, the plan's own instance. numba's answer is replaced by a stub that says
     "cached" for the default instance's module only (so no compile is needed here)."""
@@ -137,15 +143,15 @@ def test_one_file_per_choice_written_once_in_the_package_versions_folder(no_plan
 
 def test_a_plan_gives_its_laws_one_instance(no_plan):
     """Under a plan of fbl, robust and adaptive (a command that runs several laws), each of those laws'
-    runs takes the one instance of all three; a law outside the plan takes the default (every registered
-    law on the run's effects, here none)."""
+    runs takes the one instance of all three; a law outside the plan takes the small default (it and FBL on
+    the run's effects, here none)."""
     eng = _fast.CompiledSimulator(RR3)
     with _fast.planned([FBL, ROBUST, ADAPTIVE], [FRICTION]):
         inst = eng.for_run(FBL)
         assert inst.LAW_CODES == (FBL, ROBUST, ADAPTIVE) and inst.EFFECT_CODES == (FRICTION,)
         assert eng.for_run(ROBUST) is inst and eng.for_run(ADAPTIVE, np.array([1.0, FRICTION, 3.0])) is inst
         pd = eng.for_run(4)
-        assert pd.LAW_CODES == EVERY_LAW and pd.EFFECT_CODES == ()
+        assert pd.LAW_CODES == (FBL, 4) and pd.EFFECT_CODES == ()
     assert _fast._PLAN == []  # lifted after the block
 
 

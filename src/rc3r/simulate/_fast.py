@@ -8,12 +8,12 @@ supply, run in chunks.
 the dispatch over a choice of plant effects (:mod:`.engines._effects`).
 
 **Compile once per process.** Every branch is code numba compiles into every integrator, so a choice is
-what its process runs, and a process never compiles two instances where one would do
-(:meth:`CompiledSimulator.for_run`; ``docs/performance.md``, "Compile instances"): a run takes an instance
-imported already that covers its law and effects (:func:`loaded`; a superset is fine), else one whose
-integrator numba's disk cache holds, else compiles its process's :func:`plan` (``rc3r run`` plans its own
-law: the smallest instance; ``rc3r paper``, design and campaigns their laws) or the default: every
-registered law on exactly the run's plant effects, which every later run on that plant reuses.
+what its process runs (:meth:`CompiledSimulator.for_run`; ``docs/performance.md``, "Compile instances"):
+a run takes an instance imported already that covers its law and effects (:func:`loaded`; a superset is
+fine), else one whose integrator numba's disk cache holds, else compiles its process's :func:`plan` (``rc3r
+run`` plans its own law; ``rc3r paper``, design and campaigns their laws) or the default on exactly the run's
+plant effects: the run's law and FBL (:func:`.engines._dispatch.default_laws`) the first time, every
+registered law the second (at most two compiles per supply and effects in a process without a plan).
 Each choice is one file, named by a hash of its text (and, for a supply or a law or effect module outside
 rc3r, their sources), in a folder keyed by :func:`rc3r._numba_cache.package_hash`, written atomically
 and only once (the first writer wins, so numba's stamp, the file's time and size, stays valid), and
@@ -60,7 +60,6 @@ __all__ = ["CompiledSimulator", "simulator", "instantiate", "plan", "planned", "
 
 #: Simulated seconds per compiled call.
 CHUNK_S = 0.5
-
 
 #: Largest continuous-time step [s]; the stored rows are interpolated inside the steps.
 HMAX = 0.001
@@ -160,13 +159,11 @@ def instantiate(module: str, laws=None, effects=None, *, only_ready=None):
         Dotted name of the kernel supply (:mod:`.engines._template`).
     laws, effects : iterable of int, optional
         Codes of registered compiled laws (:data:`rc3r.controllers.LAWS`) and effects
-        (:data:`rc3r.plants.EFFECTS`) the instance has a branch for; None (default): every registered one.
-        Which instance a run takes: :meth:`CompiledSimulator.for_run` (each branch is code numba compiles
-        into every integrator: ``docs/performance.md``, "Compile instances").
+        (:data:`rc3r.plants.EFFECTS`) the instance has a branch for; None (default): every registered one
+        (which instance a run takes: :meth:`CompiledSimulator.for_run`).
     only_ready : tuple of str, optional
-        Names of integrators (``"integrate_continuous"``, ``"integrate_sampled"``): return the instance only
-        if it is imported already, or its file is on disk and numba's disk cache holds those integrators
-        (:func:`rc3r._numba_cache.ready`: loading it compiles nothing), else None (nothing written).
+        Integrator names (``"integrate_continuous"``, ...): the instance only if imported, or on disk with
+        those integrators in numba's disk cache (:func:`rc3r._numba_cache.ready`), else None (nothing written).
 
     Returns
     -------
@@ -306,10 +303,11 @@ class CompiledSimulator:
         """The instance a run of the law of code ``law`` on a plant of packed effects ``fx`` (:meth:`~rc3r.plants.
         Plant.pack`; None: none) in the ``which`` integrator (``"continuous"``, ``"sampled"``; None: both) takes:
         (1) an instance imported already with a branch for the law and each effect (a superset is fine);
-        (2) else the first of these choices on disk with that integrator in numba's cache (loading compiles
-        nothing): the :func:`plan` if it covers the run, the default (every registered law on exactly the run's
-        effects), every law on every effect; (3) else the first choice, compiled: the plan, else the default,
-        which later runs of other laws on the plant find in (1) (``docs/performance.md``, "Compile instances").
+        (2) else the first on disk with that integrator in numba's cache (loading compiles nothing) of: the
+        :func:`plan` if it covers the run, every law on the run's effects, the small default
+        (:func:`.engines._dispatch.default_laws`) on them, every law on every effect; (3) else compiled: the
+        plan, else the small default, or every law if an instance on those effects is imported already (the
+        process runs a law the small one lacks) (``docs/performance.md``, "Compile instances").
         """
         from ..plants import EFFECTS
         from .engines import _effects
@@ -325,7 +323,8 @@ class CompiledSimulator:
             if module == self.module and need_l <= set(sig) and need_e <= set(ecodes):
                 return mod
         plan_laws, plan_effects = _PLAN[0] if _PLAN else ((), ())
-        choices = [(None, codes), (None, None)]
+        small, every = (_dispatch.default_laws(law), codes), (None, codes)
+        choices = [every, small, (None, None)]
         if int(law) in plan_laws and set(codes) <= set(plan_effects):
             choices.insert(0, (plan_laws, plan_effects))
         funcs = _INTEGRATORS.get(which, _INTEGRATORS[None])
@@ -333,7 +332,10 @@ class CompiledSimulator:
             mod = instantiate(self.module, laws_, effects_, only_ready=funcs)
             if mod is not None:
                 return mod
-        return instantiate(self.module, *choices[0])
+        if choices[0] is not every:  # the plan
+            return instantiate(self.module, *choices[0])
+        again = any(m == self.module and set(e) == need_e for (m, _, e) in _INSTANCES)
+        return instantiate(self.module, *(every if again else small))
 
     def constants(self, rigid) -> np.ndarray:
         """The packed constants ``kc`` of ``rigid`` (its ``compiled_kernels`` must name this supply)."""
@@ -382,7 +384,6 @@ class CompiledSimulator:
 
 _PLAN: list = []
 
-
 def plan(laws=(), effects=()) -> tuple:
     """From now on in this process (and in the worker processes it forks), a run of one of the compiled laws
     of codes ``laws`` on a plant whose effects are among the codes ``effects`` takes the one instance of all
@@ -418,8 +419,7 @@ def planned(laws=(), effects=(), keep: bool = False):
 
 def loaded(module: str | None = None) -> tuple:
     """The compiled instances imported in this process (in import order), of the kernel supply ``module``
-    (a dotted name; None: of every supply): each is one instantiation, compiled or loaded from numba's disk
-    cache once per process. The inspectable count behind the rule of :meth:`CompiledSimulator.for_run`."""
+    (None: every supply), each compiled or loaded once: the count behind :meth:`CompiledSimulator.for_run`."""
     return tuple(mod for (m, _, _), mod in _INSTANCES.items() if module is None or m == module)
 
 

@@ -29,7 +29,8 @@ from numba import njit
 
 from ..._numba_cache import _inside
 
-__all__ = ["MARKER", "LAW_CODES", "law_source", "law_files", "compiled_laws", "signature"]
+__all__ = ["MARKER", "LAW_CODES", "DEFAULT_COMPANIONS", "default_laws", "law_source", "law_files", "compiled_laws",
+           "signature"]
 
 #: The line of :mod:`.compiled` that each instantiation replaces with :func:`law_source`.
 MARKER = ("from rc3r.simulate.engines._dispatch import LAW_CODES, inertia_gain, law_directions, law_jacobian, "
@@ -46,6 +47,22 @@ def compiled_laws(laws=None) -> list:
     if laws is None:
         from ...controllers import LAWS as laws
     return sorted((cls for cls in laws.values() if cls.code is not None), key=lambda cls: cls.code)
+
+
+#: The laws a run's default instance has beside its own (names): FBL, the baseline every comparison of rc3r
+#: runs against (the paper's, ``rc3r paper``, design's and the campaigns' default controller lists).
+DEFAULT_COMPANIONS = ("fbl",)
+
+
+def default_laws(law: int) -> tuple[int, ...]:
+    """Codes of the default instance's laws for a run of the law of code ``law`` without a plan: it and
+    :data:`DEFAULT_COMPANIONS`, sorted. Every law branch is code numba compiles into each integrator (about
+    1 s of CPU per law and integrator on the 3R), so the default is small; a script running a third law compiles
+    a second instance (``docs/performance.md``, "Compile instances")."""
+    from ...controllers import LAWS
+
+    extra = {LAWS[name].code for name in DEFAULT_COMPANIONS if name in LAWS and LAWS[name].code is not None}
+    return tuple(sorted({int(law)} | {int(c) for c in extra}))
 
 
 def signature(laws=None) -> tuple:
