@@ -1,6 +1,6 @@
 """Which compiled instance a run takes (rc3r.simulate._fast.for_run, plan, instantiate, loaded): compile once
-per process where one will do. Without a plan the first run on a plant's effects takes its law and FBL, a run
-of a law it lacks every registered law (at most two instances per plant, never one per law); a plan (``rc3r run``: its own law) gives the
+per process where one will do. Without a plan the first run on a plant's effects takes its law, FBL and robust,
+a run of a law it lacks every registered law (at most two instances per plant, never one per law); a plan (``rc3r run``: its own law) gives the
 planned laws' instance; an imported instance that covers a run serves it. The arithmetic of a run is the
 same whichever instance runs it.
 
@@ -72,14 +72,14 @@ def test_a_planned_run_instance_has_a_branch_for_its_law_and_effects_only(no_pla
 
 
 def test_without_a_plan_a_process_compiles_at_most_two_instances_per_plant(no_plan):
-    """With no plan, a robust run then an fbl run on a rigid plant take one instance (``loaded`` counts one):
-    the run's law and FBL, the baseline every comparison runs against (its dispatch's tested codes, read by
-    ast: 0 and 1 only). An adaptive run, which it lacks, takes a second instance of every registered law and
-    no effect, which a pd run then reuses (two instances, never one per law). On a plant with friction the
-    same: an fbl run takes FBL alone on friction, a robust run then every law on friction, reused after."""
+    """With no plan, an fbl run then a robust run on a rigid plant take one instance (``loaded`` counts one):
+    the run's law and the paper's pair, FBL and robust (its dispatch's tested codes, read by ast: 0 and 1
+    only). An adaptive run, which it lacks, takes a second instance of every registered law and no effect,
+    which a pd run then reuses (two instances, never one per law). On a plant with friction the same: a
+    robust-coeff run takes it, FBL and robust on friction, an adaptive run then every law on friction."""
     eng = _fast.CompiledSimulator(RR3)
-    first = eng.for_run(ROBUST, np.array([0.0]))
-    assert eng.for_run(FBL) is first and _fast.loaded(RR3) == (first,)
+    first = eng.for_run(FBL, np.array([0.0]))
+    assert eng.for_run(ROBUST) is first and _fast.loaded(RR3) == (first,)
     assert first.LAW_CODES == (FBL, ROBUST) and first.EFFECT_CODES == ()
     assert _branches(first, "law_signals") == [FBL, ROBUST]
     every = eng.for_run(ADAPTIVE)
@@ -87,11 +87,11 @@ def test_without_a_plan_a_process_compiles_at_most_two_instances_per_plant(no_pl
     assert _branches(every, "law_signals") == list(EVERY_LAW)
     assert eng.for_run(4) is every and _fast.loaded(RR3) == (first, every)
     fx = Plant(rc3r.load_robot(), [Friction(viscous=np.full(3, 0.3))]).pack()
-    rough = eng.for_run(FBL, fx)
-    assert rough.EFFECT_CODES == (FRICTION,) and rough.LAW_CODES == (FBL,)
-    rough_every = eng.for_run(ROBUST, fx)
+    rough = eng.for_run(2, fx)
+    assert rough.EFFECT_CODES == (FRICTION,) and rough.LAW_CODES == (FBL, ROBUST, 2)
+    rough_every = eng.for_run(ADAPTIVE, fx)
     assert rough_every.EFFECT_CODES == (FRICTION,) and rough_every.LAW_CODES == EVERY_LAW
-    assert eng.for_run(ADAPTIVE, fx) is rough_every and len(_fast.loaded(RR3)) == 4
+    assert eng.for_run(5, fx) is rough_every and len(_fast.loaded(RR3)) == 4
 
 
 def test_a_loaded_superset_is_preferred_to_compiling_a_subset(no_plan):
@@ -143,15 +143,15 @@ def test_one_file_per_choice_written_once_in_the_package_versions_folder(no_plan
 
 def test_a_plan_gives_its_laws_one_instance(no_plan):
     """Under a plan of fbl, robust and adaptive (a command that runs several laws), each of those laws'
-    runs takes the one instance of all three; a law outside the plan takes the small default (it and FBL on
-    the run's effects, here none)."""
+    runs takes the one instance of all three; a law outside the plan takes the small default (it, FBL and
+    robust on the run's effects, here none)."""
     eng = _fast.CompiledSimulator(RR3)
     with _fast.planned([FBL, ROBUST, ADAPTIVE], [FRICTION]):
         inst = eng.for_run(FBL)
         assert inst.LAW_CODES == (FBL, ROBUST, ADAPTIVE) and inst.EFFECT_CODES == (FRICTION,)
         assert eng.for_run(ROBUST) is inst and eng.for_run(ADAPTIVE, np.array([1.0, FRICTION, 3.0])) is inst
         pd = eng.for_run(4)
-        assert pd.LAW_CODES == (FBL, 4) and pd.EFFECT_CODES == ()
+        assert pd.LAW_CODES == (FBL, ROBUST, 4) and pd.EFFECT_CODES == ()
     assert _fast._PLAN == []  # lifted after the block
 
 

@@ -12,7 +12,7 @@ what its process runs (:meth:`CompiledSimulator.for_run`; ``docs/performance.md`
 a run takes an instance imported already that covers its law and effects (:func:`loaded`; a superset is
 fine), else one whose integrator numba's disk cache holds, else compiles its process's :func:`plan` (``rc3r
 run`` plans its own law; ``rc3r paper``, design and campaigns their laws) or the default on exactly the run's
-plant effects: the run's law and FBL (:func:`.engines._dispatch.default_laws`) the first time, every
+plant effects: the run's law, FBL and robust (:func:`.engines._dispatch.default_laws`) first, every
 registered law the second (at most two compiles per supply and effects in a process without a plan).
 Each choice is one file, named by a hash of its text (and, for a supply or a law or effect module outside
 rc3r, their sources), in a folder keyed by :func:`rc3r._numba_cache.package_hash`, written atomically

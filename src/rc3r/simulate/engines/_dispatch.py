@@ -49,16 +49,16 @@ def compiled_laws(laws=None) -> list:
     return sorted((cls for cls in laws.values() if cls.code is not None), key=lambda cls: cls.code)
 
 
-#: The laws a run's default instance has beside its own (names): FBL, the baseline every comparison of rc3r
-#: runs against (the paper's, ``rc3r paper``, design's and the campaigns' default controller lists).
-DEFAULT_COMPANIONS = ("fbl",)
+#: The laws a run's default instance has beside its own (names): the paper's pair, FBL and Spong's robust law,
+#: which every comparison of rc3r starts from (``rc3r paper``, the examples, design's and the campaigns' lists).
+DEFAULT_COMPANIONS = ("fbl", "robust")
 
 
 def default_laws(law: int) -> tuple[int, ...]:
     """Codes of the default instance's laws for a run of the law of code ``law`` without a plan: it and
     :data:`DEFAULT_COMPANIONS`, sorted. Every law branch is code numba compiles into each integrator (about
-    1 s of CPU per law and integrator on the 3R), so the default is small; a script running a third law compiles
-    a second instance (``docs/performance.md``, "Compile instances")."""
+    1 s of CPU per law and integrator on the 3R), so the default is small; a script running a law outside it
+    compiles a second instance (``docs/performance.md``, "Compile instances")."""
     from ...controllers import LAWS
 
     extra = {LAWS[name].code for name in DEFAULT_COMPANIONS if name in LAWS and LAWS[name].code is not None}
