@@ -49,7 +49,7 @@ STIFF_NOTE_SUBSTEPS = 16
 def own_instance(spec) -> tuple[tuple, tuple]:
     """``(laws, effects)``: the codes of the run's own law and its plant's effects, the plan of ``rc3r run``
     (:func:`rc3r.simulate._fast.plan`): one law per process, so its compiled instance has the one law's
-    branch, not every registered law's (the library default, ``docs/performance.md``, "Compile instances")."""
+    branch, not the library default's three (``docs/performance.md``, "Compile instances")."""
     fx = spec.true_plant.pack() if spec.true_plant is not None else None
     return ((spec.law.code,) if spec.law.code is not None else ()), effect_codes(fx)
 
