@@ -77,10 +77,10 @@ def add_parsers(sub, positive, lock, urdf=str) -> None:
                    help="a rotor inertia per joint (Pinocchio's armature, column qdd_j): auto (default: chosen by "
                         "cross-validation), on or off; a joint whose column the rigid model already holds (joint 1 "
                         "about the gravity axis) is merged into that coefficient, said in identified.json")
-    i.add_argument("--slow-share", type=positive(float, allow_zero=True), default=0.0, metavar="S",
+    i.add_argument("--slow-share", type=positive(float, allow_zero=True), default=None, metavar="S",
                    help="leave a joint's rows slower than S x its RMS speed (reversals, rests: stuck Coulomb "
-                        "friction) out of the fits and score them apart in the cross-validation; 0 (default) keeps "
-                        "every row; 0.1 measured in docs/identification.md 2.3")
+                        "friction) out of the fit; 0 keeps every row (default: 0 or 0.1, chosen by cross-validation "
+                        "with every row scored in two regimes, slow and fast; docs/identification.md 2.3)")
     i.add_argument("--no-consistency", action="store_true",
                    help="skip the consistency SDP of the unconstrained estimate (cvxpy)")
     i.add_argument("--no-physical", action="store_true",

@@ -222,7 +222,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
              consistency: bool = True, covariance: str = "in-band", seed: int = 0, weighting: str = "auto",
              coulomb_velocity: float | None = None, folds: int = _sel.FOLDS,
-             physical: bool = True, armature: str = "auto", slow_share: float = 0.0) -> Identification:
+             physical: bool = True, armature: str = "auto", slow_share: float | None = None) -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
 
     Parameters
@@ -316,14 +316,15 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     if len(merged) == robot.n:
         arm_opts = (False,)  # every rotor inertia merges with a rigid coefficient: nothing to fit
     sel = None
-    if max(len(cutoffs), len(vels), len(weights), len(v_cands), len(arm_opts)) > 1:
+    shares = _sel.SLOW_SHARES if slow_share is None else (float(slow_share),)
+    if max(len(cutoffs), len(vels), len(weights), len(v_cands), len(arm_opts), len(shares)) > 1:
         sel = _sel.select(robot, log, kinds, t_split, cutoffs, vels, weights, v_cands, grids=grids, folds=folds,
-                          armature=arm_opts, merged=tuple(merged), slow_share=slow_share)
+                          armature=arm_opts, merged=tuple(merged), slow_share=shares)
         c = sel["chosen"]
-        fc, vel, wgt, v_s, arm = (c["cutoff_hz"], c["velocities"], c["weighting"], c["coulomb_velocity"],
-                                  c["armature"])
+        fc, vel, wgt, v_s, arm, slow_share = (c["cutoff_hz"], c["velocities"], c["weighting"], c["coulomb_velocity"],
+                                              c["armature"], c["slow_share"])
     else:
-        fc, vel, wgt, v_s, arm = cutoffs[0], vels[0], weights[0], v_cands[0], arm_opts[0]
+        fc, vel, wgt, v_s, arm, slow_share = cutoffs[0], vels[0], weights[0], v_cands[0], arm_opts[0], shares[0]
     chosen = "given (--filter)" if cutoff_hz is not None else "cross-validation"
     prep = _flt.prepare(log, fc, vel, grids=grids)
     train = prep.usable & (prep.t <= t_split)
@@ -415,7 +416,8 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
             "velocities_chosen": "cross-validation" if len(vels) > 1 else
             ("given (--velocities)" if velocities != "auto" else "not logged"),
             "weighting": wgt, "weighting_chosen": "cross-validation" if len(weights) > 1 else "given (--weighting)",
-            "slow_share": float(slow_share), "rows_kept": kept.tolist()}
+            "slow_share": float(slow_share), "rows_kept": kept.tolist(),
+            "slow_share_chosen": "cross-validation" if len(shares) > 1 else "given (--slow-share)"}
     law = {"coulomb": COULOMB_LAW, "coulomb_velocity": float(v_s),
            "chosen": "cross-validation" if len(v_cands) > 1 else
            ("given (--coulomb-velocity)" if coulomb_velocity is not None else "no Coulomb term")}
