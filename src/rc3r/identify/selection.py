@@ -319,7 +319,7 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     rows = []
     cache = {}
 
-    def run(fc, vel, v_s, weights, arm, share_list=shares):
+    def run(fc, vel, v_s, weights, arm, share_list=shares[:1]):
         prep, LY, PY, th, memo = cache[(fc, vel)]
         ks = tuple(kinds) + (("armature",) if arm else ())
         cols = kept_columns(ks, n, merged)
@@ -367,30 +367,29 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
             cache[(fc, vel)] = (prep, LY, PY, th, {})
             for v_s in (vs if not multi else (v0,)):
                 run(fc, vel, v_s, weightings, arm0)
-    tops = {share: pick([r for r in rows if r["slow_share"] == share]) for share in shares}
-    tops = {share: top for share, top in tops.items() if top is not None}
-    if not tops:
+    top = pick(rows)
+    if top is None:
         raise ConfigError(f"log {log.source}: too short to cross-validate the filter ({folds} blocks of the "
                           "training part); give a longer log or --filter, --velocities, --weighting")
-    cache = {k: cache[k] for k in sorted({(r["cutoff_hz"], r["velocities"]) for r in tops.values()})}
-    for share, top in tops.items():  # each slow share's own choice, as when it is given
-        fc, vel = top["cutoff_hz"], top["velocities"]
-        if multi:
-            for v_s in vs:
-                if v_s != v0:
-                    run(fc, vel, v_s, weightings, arm0, (share,))
-            top = pick([r for r in rows if r["cutoff_hz"] == fc and r["velocities"] == vel and r["slow_share"] == share])
-        for arm in arm_opts:
-            if arm != arm0:
-                other = min(run(fc, vel, top["coulomb_velocity"], weightings, arm, (share,)), key=lambda r: r["score"])
-                with_arm, without = (other, top) if arm else (top, other)
-                top = with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without
-        tops[share] = top
-    # the shares' choices compared on the same rows in the same two regimes (the largest share's)
-    best = min(tops.values(), key=lambda r: r["regime_score"]) if len(tops) > 1 else next(iter(tops.values()))
+    fc, vel = top["cutoff_hz"], top["velocities"]
+    cache = {(fc, vel): cache[(fc, vel)]}
+    if multi:
+        for v_s in vs:
+            if v_s != v0:
+                run(fc, vel, v_s, weightings, arm0)
+        top = pick([r for r in rows if r["cutoff_hz"] == fc and r["velocities"] == vel])
+    for arm in arm_opts:
+        if arm != arm0:
+            other = min(run(fc, vel, top["coulomb_velocity"], weightings, arm), key=lambda r: r["score"])
+            with_arm, without = (other, top) if arm else (top, other)
+            top = with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without
+    best = top
+    if len(shares) > 1:  # the other shares at the chosen settings, all on the same rows in the same two regimes
+        same = run(fc, vel, top["coulomb_velocity"], (top["weighting"],), top["armature"], shares[1:])
+        best = min([top] + same, key=lambda r: r["regime_score"])
     chosen = {k: best[k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature",
                                    "slow_share", "score")}
-    if len(tops) > 1:
+    if len(shares) > 1:
         chosen["regime_score"] = best["regime_score"]
     lo = min(float(r["score"]) for r in rows if r["slow_share"] == best["slow_share"])
     stages = ("stage 1: every cut-off x velocity source x weighting at v_s = "
@@ -402,12 +401,11 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         stages += (f" (with{'' if arm0 else 'out'} a rotor inertia per joint), then every weighting "
                    f"with{'out' if arm0 else ''} it at the chosen settings; the rotor inertias are kept only "
                    f"when they lower the best score by more than {100 * ARMATURE_GAIN:g} %")
-    if len(tops) > 1:
-        stages += ("; all this for each slow share (" + ", ".join(f"{x:g}" for x in tops) + "; 0: every row "
-                   f"fitted, RMS pooled over the rows; else each joint's rows slower than the share x its RMS speed "
-                   f"left out of the fit, RMS {SLOW_SCORE} over the slow and the other rows), then the shares' "
-                   f"choices compared by regime_score: each joint's RMS the geometric mean of its RMS over its rows "
-                   f"slower than {split:g} x its RMS speed and over the others, for every share alike")
+    if len(shares) > 1:
+        stages += (f"; every row fitted (slow share {shares[0]:g}), then at the chosen settings the fit without each "
+                   "joint's rows slower than " + ", ".join(f"{x:g}" for x in shares[1:]) + " x its RMS speed; of "
+                   "these the lowest regime_score: each joint's RMS the geometric mean of its RMS over its rows "
+                   f"slower than {split:g} x its RMS speed and over the others (the same rows for every share)")
     return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
             "stage1_coulomb_velocity": float(v0) if multi else None, "rule": RULE,
             "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
