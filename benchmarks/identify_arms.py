@@ -213,7 +213,8 @@ def main(argv=None) -> int:
                 prms = np.asarray((data.get("physical") or {}).get("validation", {}).get("rms", rms))
                 sel = data["filter"]
                 arm = data.get("armature") or {}
-                slow = f", slow share {sel['slow_share']:g} ({sel['slow_share_chosen']})" if "slow_share_chosen" in sel else ""
+                slow = (f", slow share {sel['slow_share']:g} ({sel['slow_share_chosen']})"
+                        if "slow_share_chosen" in sel else "")
                 print(f"\n{name}: {log.samples} samples at {1 / spec['period']:g} Hz, velocities "
                       f"{'logged, ' + format(spec['lag'] * 1e3, 'g') + ' ms late' if spec['velocities'] else 'not logged'}"
                       f"{', at rest for the last ' + format(spec['rest'], 'g') + ' s' if spec['rest'] else ''}; "

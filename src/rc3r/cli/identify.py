@@ -204,6 +204,13 @@ def cmd_identify(args) -> int:
         if len(arms) > 1:
             print(f"  rotor inertia per joint at the chosen settings: with {arms[True]:.4f}, without {arms[False]:.4f} "
                   f"-> {'with' if c['armature'] else 'without'}")
+        same = {r["slow_share"]: r["regime_score"] for r in rows if "regime_score" in r and all(
+            r[k] == c[k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature"))}
+        if len(same) > 1:
+            print("  slow rows at the chosen settings (regime score, the same rows: slow and fast apart): "
+                  + ", ".join(f"share {k:g} {v:.4f}" for k, v in same.items())
+                  + f" -> {c['slow_share']:g} (each joint's rows slower than {c['slow_share']:g} x its RMS speed "
+                  "left out of the fit)")
     law = res.friction_law
     print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}, weighting "
           f"{f['weighting']}, Coulomb tanh(qd / {law['coulomb_velocity']:g} rad/s); "

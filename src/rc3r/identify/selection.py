@@ -14,7 +14,14 @@ What is chosen (:func:`select`), among what the log allows:
   (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``);
 * whether a rotor inertia per joint (armature, the column ``qdd_j``) is fitted: kept only when it lowers
   the best score by more than :data:`ARMATURE_GAIN` (joints whose column the rigid regressor holds are
-  never fitted: ``merged``).
+  never fitted: ``merged``);
+* whether each joint's slow rows (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`) are fitted, among
+  :data:`SLOW_SHARES`: where a Coulomb joint sticks its friction is anything in ``[-f_c, f_c]``, no function of
+  ``qd``, and those rows pull the static terms (offsets, gravity) off. Decided last, at the settings chosen with
+  every row fitted: both fits predict the same rows, each joint's split into the same two regimes (slower than
+  the largest share x its RMS speed, and the others), and the lower ``regime_score`` (each joint's RMS the
+  geometric mean of its two regimes' RMS; one regime's share of the rows does not decide) wins. One setting
+  changes between the two, so the comparison measures the rows left out and nothing else.
 
 How a setting is scored. The training part (the log's first ``1 - F``, outside the filters'
 start-up) is cut into :data:`FOLDS` contiguous blocks of equal duration. For every block, the
@@ -304,7 +311,8 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     -------
     dict
         ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``armature``,
-        ``slow_share``, ``score``), ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
+        ``slow_share``, ``score``, and ``regime_score`` with several shares), ``stage1_coulomb_velocity`` (``v_s``
+        of stage 1, None when one stage), ``candidates``
         (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``,
         ``best_score``, ``method`` (one paragraph), ``score`` (its meaning).
     """
