@@ -208,7 +208,7 @@ def main(argv=None) -> int:
             one, one_how, best, how = cached_plain(args.plain_cache, f"{name}:{args.seed}", robot, log)
             for share in args.slow_share.split(","):
                 extra = () if share == "auto" else ("--slow-share", f"{float(share):g}")
-                data, wall, verdict = run_cli(args, path, Path(tmp) / f"{name}-{share:g}", arm_args, extra)
+                data, wall, verdict = run_cli(args, path, Path(tmp) / f"{name}-{share}", arm_args, extra)
                 rms = np.asarray(data["validation"]["rms"])
                 prms = np.asarray((data.get("physical") or {}).get("validation", {}).get("rms", rms))
                 sel = data["filter"]

@@ -117,12 +117,13 @@ def test_held_out_rms_is_the_torque_noise_floor(arm, motion):
 def test_cross_validation_prefers_differentiated_velocities_when_the_logged_ones_lag(arm, motion):
     """A 100 Hz log with a coarse 12-bit encoder and clean logged velocities (1e-4 rad/s): the CV takes the
     logged ones; the same log whose velocities lag the positions by 30 ms: differentiated. Only 2-7 Hz
-    cut-offs are tried at 100 Hz, and the scores behind the choice are recorded."""
+    cut-offs are tried at 100 Hz, and the scores behind the choice are recorded. (Every row fitted: the
+    default's slow share is decided after these settings, by another score.)"""
     chosen = {}
     for lag in (0.0, 0.03):
         noise = SensorNoise(period=0.01, velocity_lag=lag, torque_std=0.05, velocity_std=1e-4, encoder_counts=2 ** 12)
         log, _ = sample_log(motion, seed=1, noise=noise)
-        res = identify(arm, log, consistency=False)
+        res = identify(arm, log, consistency=False, slow_share=0.0)
         sel = res.selection
         assert {r["cutoff_hz"] for r in sel["candidates"]} <= {2.0, 3.0, 5.0, 7.0}
         assert min(r["score"] for r in sel["candidates"]) == sel["chosen"]["score"]
@@ -132,12 +133,12 @@ def test_cross_validation_prefers_differentiated_velocities_when_the_logged_ones
 
 
 def test_given_settings_skip_the_search(arm, motion):
-    """With cut-off, velocities, weighting, v_s and the rotor inertias all given, no cross-validation runs and
-    they are used."""
+    """With cut-off, velocities, weighting, v_s, the rotor inertias and the slow share all given, no
+    cross-validation runs and they are used."""
     log, _ = sample_log(motion, seed=0)
     res = identify(arm, log, cutoff_hz=3.0, velocities="differentiated", weighting="ordinary",
-                   coulomb_velocity=0.0, consistency=False, armature="off")
-    assert res.selection is None
+                   coulomb_velocity=0.0, consistency=False, armature="off", slow_share=0.0)
+    assert res.selection is None and res.filter["slow_share_chosen"] == "given (--slow-share)"
     assert (res.filter["cutoff_hz"], res.filter["velocities"], res.filter["weighting"]) == (3.0, "differentiated",
                                                                                           "ordinary")
     assert res.friction_law["coulomb_velocity"] == 0.0 and res.filter["chosen"] == "given (--filter)"
