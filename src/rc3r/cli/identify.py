@@ -193,7 +193,8 @@ def cmd_identify(args) -> int:
         a0 = rows[0].get("armature", False)
         for w in dict.fromkeys(r["weighting"] for r in rows):
             alt = [r for r in rows if r["cutoff_hz"] == c["cutoff_hz"] and r["velocities"] == c["velocities"]
-                   and r["weighting"] == w and r.get("armature", False) == a0]
+                   and r["weighting"] == w and r.get("armature", False) == a0
+                   and r.get("slow_share") == rows[0].get("slow_share")]
             print(f"  {w:>9} at {c['cutoff_hz']:g} Hz, {c['velocities']}, by v_s [rad/s]: "
                   + ", ".join(f"{r['coulomb_velocity']:g} {r['score']:.4f}" for r in sorted(
                       alt, key=lambda r: r["coulomb_velocity"])))
@@ -209,8 +210,8 @@ def cmd_identify(args) -> int:
         if len(same) > 1:
             print("  slow rows at the chosen settings (regime score, the same rows: slow and fast apart): "
                   + ", ".join(f"share {k:g} {v:.4f}" for k, v in same.items())
-                  + f" -> {c['slow_share']:g} (each joint's rows slower than {c['slow_share']:g} x its RMS speed "
-                  "left out of the fit)")
+                  + f" -> {c['slow_share']:g}" + (f" (each joint's rows slower than {c['slow_share']:g} x its RMS "
+                                                   "speed left out of the fit)" if c["slow_share"] else " (every row)"))
     law = res.friction_law
     print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}, weighting "
           f"{f['weighting']}, Coulomb tanh(qd / {law['coulomb_velocity']:g} rad/s); "
