@@ -32,6 +32,10 @@ and, stricter, each joint's own minimum over all those settings (a minimum over 
 figures: biased low).
 Then ``rc3r design (--robot | --urdf) --bounds ID/bounds.toml --rate 1000 --n 2 --duration 0.5``: accepted
 (exit 0) or its one-line refusal.
+
+The plain fits are most of the cost (42 fits of the 2 kHz UR5, 84 of the xArm7: 4-6 minutes per seed on the
+shared two-core machine); ``--plain-cache FILE`` keeps them by arm and seed (they depend on the seeded log and
+the plain grid only) so that a change to identify's defaults is measured again in about a minute per seed.
 """
 from __future__ import annotations
 
