@@ -45,6 +45,7 @@ def main(argv=None) -> int:
                        covariance=args.covariance,
                        slow_share=None if args.slow_share == "auto" else float(args.slow_share))
         xt = np.concatenate([truth["theta"], truth["viscous"], truth["coulomb"], truth["offset"]])
+        xt = np.concatenate([xt, np.zeros(res.x.size - xt.size)])  # fitted rotor inertias: the 3R has none
         d = res.x - xt
         m = float(d[:arm.p] @ np.linalg.solve(res.cov_theta, d[:arm.p]))
         rows.append((res.filter["cutoff_hz"], m <= res.ellipsoid["chi2"], m / arm.p,
