@@ -32,6 +32,10 @@ and, stricter, each joint's own minimum over all those settings (a minimum over 
 figures: biased low).
 Then ``rc3r design (--robot | --urdf) --bounds ID/bounds.toml --rate 1000 --n 2 --duration 0.5``: accepted
 (exit 0) or its one-line refusal.
+
+The plain fits are most of the cost (42 fits of the 2 kHz UR5, 84 of the xArm7: 4-6 minutes per seed on the
+shared two-core machine); ``--plain-cache FILE`` keeps them by arm and seed (they depend on the seeded log and
+the plain grid only) so that a change to identify's defaults is measured again in about a minute per seed.
 """
 from __future__ import annotations
 
@@ -151,6 +155,19 @@ def best_plain(robot, log):
     return one, one_how, best, how
 
 
+def cached_plain(path, key, robot, log):
+    """:func:`best_plain`, read from the JSON file ``path`` under ``key`` when there, else computed and stored."""
+    store = json.loads(Path(path).read_text()) if path and Path(path).exists() else {}
+    if key not in store:
+        one, one_how, best, how = best_plain(robot, log)
+        store[key] = {"best_fit": one.tolist(), "best_fit_setting": one_how, "joint_min": best.tolist(),
+                      "joint_min_setting": how}
+        if path:
+            Path(path).write_text(json.dumps(store, indent=1))
+    e = store[key]
+    return np.asarray(e["best_fit"]), e["best_fit_setting"], np.asarray(e["joint_min"]), e["joint_min_setting"]
+
+
 def run_cli(args, log_path, out, arm_args, extra=()):
     """``rc3r identify`` with defaults (and ``extra`` options); ``rc3r design --bounds``: (identified.json, wall s,
     design verdict)."""
@@ -175,8 +192,12 @@ def main(argv=None) -> int:
     ap.add_argument("--design-n", type=int, default=2, help="rc3r design --n (default 2)")
     ap.add_argument("--design-duration", type=float, default=0.5, help="rc3r design --duration (default 0.5)")
     ap.add_argument("--skip-design", action="store_true", help="do not run rc3r design")
-    ap.add_argument("--slow-share", default="0",
-                    help="comma-separated values of identify's --slow-share to measure (default 0: the defaults)")
+    ap.add_argument("--slow-share", default="auto",
+                    help="comma-separated values of identify's --slow-share to measure; auto: the option not given "
+                         "(identify's default, chosen by cross-validation; default auto)")
+    ap.add_argument("--plain-cache", metavar="JSON",
+                    help="keep the best plain fits (the costly part: 42-84 fits per arm) in this file, keyed by arm "
+                         "and seed, and reuse them from it (they depend on the log and the plain grid only)")
     args = ap.parse_args(argv)
     from rc3r.identify.log import save_log
 
@@ -188,21 +209,23 @@ def main(argv=None) -> int:
             robot, arm_args, log = make_log(name, spec, args.seed)
             path = Path(tmp) / f"{name}.npz"
             save_log(log, path)
-            one, one_how, best, how = best_plain(robot, log)
-            for share in (float(x) for x in args.slow_share.split(",")):
-                extra = () if share == 0 else ("--slow-share", f"{share:g}")
-                data, wall, verdict = run_cli(args, path, Path(tmp) / f"{name}-{share:g}", arm_args, extra)
+            one, one_how, best, how = cached_plain(args.plain_cache, f"{name}:{args.seed}", robot, log)
+            for share in args.slow_share.split(","):
+                extra = () if share == "auto" else ("--slow-share", f"{float(share):g}")
+                data, wall, verdict = run_cli(args, path, Path(tmp) / f"{name}-{share}", arm_args, extra)
                 rms = np.asarray(data["validation"]["rms"])
                 prms = np.asarray((data.get("physical") or {}).get("validation", {}).get("rms", rms))
                 sel = data["filter"]
                 arm = data.get("armature") or {}
+                slow = (f", slow share {sel['slow_share']:g} ({sel['slow_share_chosen']})"
+                        if "slow_share_chosen" in sel else "")
                 print(f"\n{name}: {log.samples} samples at {1 / spec['period']:g} Hz, velocities "
                       f"{'logged, ' + format(spec['lag'] * 1e3, 'g') + ' ms late' if spec['velocities'] else 'not logged'}"
                       f"{', at rest for the last ' + format(spec['rest'], 'g') + ' s' if spec['rest'] else ''}; "
-                      f"identify{' --slow-share ' + format(share, 'g') if share else ''} {wall:.0f} s: "
+                      f"identify{' '.join(('',) + extra)} {wall:.0f} s: "
                       f"{sel['cutoff_hz']:g} Hz, {sel['velocities']}, {sel['weighting']}, "
                       f"v_s {data['friction_law']['coulomb_velocity']:g}, rotor inertias "
-                      f"{'fitted' if arm.get('fitted') else 'not fitted'}"
+                      f"{'fitted' if arm.get('fitted') else 'not fitted'}{slow}"
                       + (" (merged: " + ", ".join(f"{a}->{b}" for a, b in arm["merged"].items()) + ")"
                          if arm.get("merged") else ""))
                 print(f"  best plain OLS fit (lowest geometric mean): {one_how}")
@@ -219,7 +242,7 @@ def main(argv=None) -> int:
                           " ".join(f"{x:g}" for x in spec["armature"]) + ")")
                 print(f"  rc3r design --bounds: {verdict}")
     for share in worst:
-        print(f"\n--slow-share {share:g}: worst ratio, any joint, of the default's or the bounds' estimate's RMS: to the "
+        print(f"\n--slow-share {share}: worst ratio, any joint, of the default's or the bounds' estimate's RMS: to the "
               f"best plain OLS fit {worst[share]:.3f} ({'within' if worst[share] <= 1.15 else 'beyond'} 15 %); to the "
               f"joint's own minimum over every setting {worst_j[share]:.3f} "
               f"({'within' if worst_j[share] <= 1.15 else 'beyond'} 15 %)")

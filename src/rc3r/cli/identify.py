@@ -77,10 +77,10 @@ def add_parsers(sub, positive, lock, urdf=str) -> None:
                    help="a rotor inertia per joint (Pinocchio's armature, column qdd_j): auto (default: chosen by "
                         "cross-validation), on or off; a joint whose column the rigid model already holds (joint 1 "
                         "about the gravity axis) is merged into that coefficient, said in identified.json")
-    i.add_argument("--slow-share", type=positive(float, allow_zero=True), default=0.0, metavar="S",
+    i.add_argument("--slow-share", type=positive(float, allow_zero=True), default=None, metavar="S",
                    help="leave a joint's rows slower than S x its RMS speed (reversals, rests: stuck Coulomb "
-                        "friction) out of the fits and score them apart in the cross-validation; 0 (default) keeps "
-                        "every row; 0.1 measured in docs/identification.md 2.3")
+                        "friction) out of the fit; 0 keeps every row (default: 0 or 0.1, chosen by cross-validation "
+                        "with every row scored in two regimes, slow and fast; docs/identification.md 2.3)")
     i.add_argument("--no-consistency", action="store_true",
                    help="skip the consistency SDP of the unconstrained estimate (cvxpy)")
     i.add_argument("--no-physical", action="store_true",
@@ -193,7 +193,8 @@ def cmd_identify(args) -> int:
         a0 = rows[0].get("armature", False)
         for w in dict.fromkeys(r["weighting"] for r in rows):
             alt = [r for r in rows if r["cutoff_hz"] == c["cutoff_hz"] and r["velocities"] == c["velocities"]
-                   and r["weighting"] == w and r.get("armature", False) == a0]
+                   and r["weighting"] == w and r.get("armature", False) == a0
+                   and r.get("slow_share") == rows[0].get("slow_share")]
             print(f"  {w:>9} at {c['cutoff_hz']:g} Hz, {c['velocities']}, by v_s [rad/s]: "
                   + ", ".join(f"{r['coulomb_velocity']:g} {r['score']:.4f}" for r in sorted(
                       alt, key=lambda r: r["coulomb_velocity"])))
@@ -204,6 +205,13 @@ def cmd_identify(args) -> int:
         if len(arms) > 1:
             print(f"  rotor inertia per joint at the chosen settings: with {arms[True]:.4f}, without {arms[False]:.4f} "
                   f"-> {'with' if c['armature'] else 'without'}")
+        same = {r["slow_share"]: r["regime_score"] for r in rows if "regime_score" in r and all(
+            r[k] == c[k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature"))}
+        if len(same) > 1:
+            print("  slow rows at the chosen settings (regime score, the same rows: slow and fast apart): "
+                  + ", ".join(f"share {k:g} {v:.4f}" for k, v in same.items())
+                  + f" -> {c['slow_share']:g}" + (f" (each joint's rows slower than {c['slow_share']:g} x its RMS "
+                                                   "speed left out of the fit)" if c["slow_share"] else " (every row)"))
     law = res.friction_law
     print(f"filter: {f['cutoff_hz']:.3g} Hz ({f['chosen']}), velocities {f['velocities']}, weighting "
           f"{f['weighting']}, Coulomb tanh(qd / {law['coulomb_velocity']:g} rad/s); "

@@ -222,7 +222,7 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
              test_fraction: float = 0.2, confidence: float = 0.95, velocities: str = "auto",
              consistency: bool = True, covariance: str = "in-band", seed: int = 0, weighting: str = "auto",
              coulomb_velocity: float | None = None, folds: int = _sel.FOLDS,
-             physical: bool = True, armature: str = "auto", slow_share: float = 0.0) -> Identification:
+             physical: bool = True, armature: str = "auto", slow_share: float | None = None) -> Identification:
     """Identify ``robot``'s coefficients, friction and their covariance from ``log`` (module docstring).
 
     Parameters
@@ -268,9 +268,10 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         (:func:`~rc3r.identify.regressors.merged_columns`).
     physical : bool
         Fit the physically consistent estimate (:func:`rc3r.identify.physical.fit_physical`; SciPy only).
-    slow_share : float
+    slow_share : float, optional
         A joint's rows slower than this x its RMS speed (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`)
-        are left out of the fits and scored apart by the cross-validation; 0 (default) keeps every row.
+        are left out of the fit; 0 keeps every row; default: chosen among
+        :data:`~rc3r.identify.selection.SLOW_SHARES` at the chosen settings (:func:`~rc3r.identify.selection.select`).
     """
     kinds = tuple(k for k in FRICTION_KINDS if k in tuple(friction))
     if armature not in ARMATURE_CHOICES:
@@ -316,14 +317,15 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
     if len(merged) == robot.n:
         arm_opts = (False,)  # every rotor inertia merges with a rigid coefficient: nothing to fit
     sel = None
-    if max(len(cutoffs), len(vels), len(weights), len(v_cands), len(arm_opts)) > 1:
+    shares = _sel.SLOW_SHARES if slow_share is None else (float(slow_share),)
+    if max(len(cutoffs), len(vels), len(weights), len(v_cands), len(arm_opts), len(shares)) > 1:
         sel = _sel.select(robot, log, kinds, t_split, cutoffs, vels, weights, v_cands, grids=grids, folds=folds,
-                          armature=arm_opts, merged=tuple(merged), slow_share=slow_share)
+                          armature=arm_opts, merged=tuple(merged), slow_share=shares)
         c = sel["chosen"]
-        fc, vel, wgt, v_s, arm = (c["cutoff_hz"], c["velocities"], c["weighting"], c["coulomb_velocity"],
-                                  c["armature"])
+        fc, vel, wgt, v_s, arm, slow_share = (c[k] for k in ("cutoff_hz", "velocities", "weighting",
+                                                             "coulomb_velocity", "armature", "slow_share"))
     else:
-        fc, vel, wgt, v_s, arm = cutoffs[0], vels[0], weights[0], v_cands[0], arm_opts[0]
+        fc, vel, wgt, v_s, arm, slow_share = cutoffs[0], vels[0], weights[0], v_cands[0], arm_opts[0], shares[0]
     chosen = "given (--filter)" if cutoff_hz is not None else "cross-validation"
     prep = _flt.prepare(log, fc, vel, grids=grids)
     train = prep.usable & (prep.t <= t_split)
@@ -402,20 +404,18 @@ def identify(robot, log, friction=("viscous", "coulomb", "offset"), cutoff_hz: f
         "rms_filtered": np.sqrt(np.mean((prep.tau[test] - A[test] @ fit.x) ** 2, axis=0)).tolist(),
         "rms_nominal": np.sqrt(np.mean((tau_te - nominal) ** 2, axis=0)).tolist(),
         "inside_band": float(inside.mean()), "inside_band_per_joint": inside.mean(axis=0).tolist(),
-        "band_confidence": float(confidence),
-        "meaning": "rms: held-out torques as logged minus the model at the states low-passed at the cut-off "
-                   "(q and logged qd zero-phase at f_c, derivatives by central differences), at the logged "
-                   "stamps [N m]; rms_filtered: the same after the parallel low-pass; rms_nominal: the robot's "
-                   "own coefficients, no friction; inside_band: fraction of held-out logged torques within the "
-                   "prediction band",
-    }
+        "band_confidence": float(confidence), "meaning": "rms: held-out torques as logged minus the model at the "
+        "states low-passed at the cut-off (q and logged qd zero-phase at f_c, derivatives by central differences), at "
+        "the logged stamps [N m]; rms_filtered: the same after the parallel low-pass; rms_nominal: the robot's own "
+        "coefficients, no friction; inside_band: fraction of held-out logged torques within the prediction band"}
     filt = {"cutoff_hz": fc, "chosen": chosen, "order": _flt.ORDER, "kind": "Butterworth, zero phase (sosfiltfilt)",
             "state_cutoff_hz": prep.state_cutoff_hz, "predict_cutoff_hz": _flt.PREDICT_FACTOR * fc, "edge_s": edge,
             "rate_hz": fs, "coarse_rate_hz": prep.fs_coarse, "velocities": prep.velocities,
             "velocities_chosen": "cross-validation" if len(vels) > 1 else
             ("given (--velocities)" if velocities != "auto" else "not logged"),
             "weighting": wgt, "weighting_chosen": "cross-validation" if len(weights) > 1 else "given (--weighting)",
-            "slow_share": float(slow_share), "rows_kept": kept.tolist()}
+            "slow_share": float(slow_share), "rows_kept": kept.tolist(), "slow_share_chosen": "cross-validation"
+            if len(shares) > 1 else "given (--slow-share)"}
     law = {"coulomb": COULOMB_LAW, "coulomb_velocity": float(v_s),
            "chosen": "cross-validation" if len(v_cands) > 1 else
            ("given (--coulomb-velocity)" if coulomb_velocity is not None else "no Coulomb term")}

@@ -14,7 +14,14 @@ What is chosen (:func:`select`), among what the log allows:
   (:func:`~rc3r.identify.regressors.coulomb`; 0 is ``sign``);
 * whether a rotor inertia per joint (armature, the column ``qdd_j``) is fitted: kept only when it lowers
   the best score by more than :data:`ARMATURE_GAIN` (joints whose column the rigid regressor holds are
-  never fitted: ``merged``).
+  never fitted: ``merged``);
+* whether each joint's slow rows (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`) are fitted, among
+  :data:`SLOW_SHARES`: where a Coulomb joint sticks its friction is anything in ``[-f_c, f_c]``, no function of
+  ``qd``, and those rows pull the static terms (offsets, gravity) off. Decided last, at the settings chosen with
+  every row fitted: both fits predict the same rows, each joint's split into the same two regimes (slower than
+  the largest share x its RMS speed, and the others), and the lower ``regime_score`` (each joint's RMS the
+  geometric mean of its two regimes' RMS; one regime's share of the rows does not decide) wins. One setting
+  changes between the two, so the comparison measures the rows left out and nothing else.
 
 How a setting is scored. The training part (the log's first ``1 - F``, outside the filters'
 start-up) is cut into :data:`FOLDS` contiguous blocks of equal duration. For every block, the
@@ -48,7 +55,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from . import filtering as _flt
-from .estimate import WEIGHTINGS, slow_rows
+from .estimate import SLOW_SHARE, WEIGHTINGS, slow_rows
 from .regressors import coulomb, identification_regressor, joint_columns, kept_columns
 
 __all__ = ["FOLDS", "GUARD", "COULOMB_VELOCITIES", "COULOMB_START", "CV_RATE_FACTOR", "CV_COARSE_FACTOR",
@@ -98,6 +105,11 @@ TWO_STAGE = False
 #: ``"balanced"``, the geometric mean of the two regimes' RMS; ``"pooled"``, one RMS over all; ``"fast"``, the
 #: others only.
 SLOW_SCORE = "balanced"
+
+#: The slow-row shares (:func:`~rc3r.identify.estimate.slow_rows`) the cross-validation chooses among when none is
+#: given: every row, or each joint's rows slower than :data:`~rc3r.identify.estimate.SLOW_SHARE` x its RMS speed
+#: left out of the fit.
+SLOW_SHARES = (0.0, SLOW_SHARE)
 
 #: Re-weightings of the per-joint weighted fit (as :func:`~rc3r.identify.estimate.weighted_least_squares`).
 ITERATIONS = 2
@@ -167,7 +179,8 @@ def _fit(G, b, yy, weighting: str, count=None) -> np.ndarray:
     return x
 
 
-def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS, slow=None) -> dict:
+def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: int = FOLDS, slow=None,
+              how: str | None = None) -> dict:
     """Blocked cross-validation RMS per joint of a fit of ``y ~ A x`` predicting ``tau`` by ``P x`` (module docstring).
 
     Parameters
@@ -188,12 +201,16 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
         Rows of each joint in the slow regime (reversals, rests: :func:`~rc3r.identify.estimate.slow_rows`):
         a joint's RMS is then the geometric mean of its RMS over its slow rows and over the others (each
         regime counts alike, whatever its share of the training part).
+    how : str or tuple of str, optional
+        How the regimes pool (as :data:`SLOW_SCORE`, its default); a tuple: ``{weighting: (rms, ...)}``, one (n,)
+        per entry.
 
     Returns
     -------
     dict
         ``{weighting: (n,) RMS [N m]}`` (``inf`` when a fold leaves too few rows to fit).
     """
+    how = SLOW_SCORE if how is None else how
     idx = np.nonzero(train)[0]
     K, n, m = A.shape
     tt = t[idx]
@@ -229,7 +246,8 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
     for i in range(folds):
         use = (mid < edges[i] - guard) | (mid > edges[i + 1] + guard)
         if count[use].sum() * n <= 2 * m:
-            return {w: np.full(n, np.inf) for w in weightings}
+            return {w: ((np.full(n, np.inf),) * len(how) if isinstance(how, tuple) else np.full(n, np.inf))
+                    for w in weightings}
         val = idx[fold_of == i]
         sv = slow[val]
         rows += np.stack([np.sum(~sv, axis=0), np.sum(sv, axis=0)])
@@ -237,14 +255,20 @@ def cv_scores(A, y, P, tau, t, train, fc: float, weightings=WEIGHTINGS, folds: i
             x = _fit(G[use].sum(axis=0), bb[use].sum(axis=0), yy[use].sum(axis=0), w, used[use].sum(axis=0))
             e2 = (tau[val] - P[val] @ x) ** 2
             sse[w] += np.stack([np.sum(e2 * ~sv, axis=0), np.sum(e2 * sv, axis=0)])
+    if isinstance(how, tuple):
+        return {w: tuple(_pool(sse[w], rows, h) for h in how) for w in weightings}
+    return {w: _pool(sse[w], rows, how) for w in weightings}
+
+
+def _pool(sse, rows, how: str) -> np.ndarray:
+    """Per-joint RMS (n,) from the squared errors and row counts (2, n) of the fast and slow regimes."""
+    pooled = np.sqrt(sse.sum(axis=0) / rows.sum(axis=0))
+    if how == "pooled":
+        return pooled
+    if how == "fast":
+        return np.where(rows[0] > 0, np.sqrt(sse[0] / np.maximum(rows[0], 1)), pooled)
     both = np.all(rows > 0, axis=0)  # joints with rows in both regimes: geometric mean of the two
-    if SLOW_SCORE == "pooled":
-        return {w: np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0)) for w in weightings}
-    if SLOW_SCORE == "fast":
-        return {w: np.where(rows[0] > 0, np.sqrt(sse[w][0] / np.maximum(rows[0], 1)),
-                            np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0))) for w in weightings}
-    return {w: np.where(both, np.sqrt(np.sqrt(sse[w][0] / np.maximum(rows[0], 1) * sse[w][1] / np.maximum(rows[1], 1))),
-                        np.sqrt(sse[w].sum(axis=0) / rows.sum(axis=0))) for w in weightings}
+    return np.where(both, np.sqrt(np.sqrt(sse[0] / np.maximum(rows[0], 1) * sse[1] / np.maximum(rows[1], 1))), pooled)
 
 
 def _score(rms) -> float:
@@ -254,7 +278,7 @@ def _score(rms) -> float:
 
 
 def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, coulomb_velocities,
-           grids=None, folds: int = FOLDS, armature=(False,), merged=(), slow_share: float = 0.0) -> dict:
+           grids=None, folds: int = FOLDS, armature=(False,), merged=(), slow_share=0.0) -> dict:
     """Choose cut-off, velocity source, weighting, Coulomb smoothing and armature by cross-validation.
 
     Parameters
@@ -277,16 +301,18 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     merged : sequence of int
         Joints (0-based) whose armature column is in the rigid regressor's span (not fitted:
         :func:`~rc3r.identify.regressors.merged_columns`).
-    slow_share : float
+    slow_share : float or sequence of float
         The folds' fits leave out a joint's rows slower than this x its RMS speed, as the final fit does
         (:func:`~rc3r.identify.estimate.slow_rows`; 0: none); the blocks' predictions cover every row, scored
-        per regime (:data:`SLOW_SCORE`).
+        per regime (:data:`SLOW_SCORE`). Several: each is a candidate, every one scored on the same rows split
+        into the same regimes (those of the largest share), so their scores compare.
 
     Returns
     -------
     dict
         ``chosen`` (``cutoff_hz``, ``velocities``, ``weighting``, ``coulomb_velocity``, ``armature``,
-        ``score``), ``stage1_coulomb_velocity`` (``v_s`` of stage 1, None when one stage), ``candidates``
+        ``slow_share``, ``score``, and ``regime_score`` with several shares), ``stage1_coulomb_velocity`` (``v_s``
+        of stage 1, None when one stage), ``candidates``
         (every setting scored: its settings, ``rms`` per joint and ``score``, in order), ``folds``,
         ``best_score``, ``method`` (one paragraph), ``score`` (its meaning).
     """
@@ -295,11 +321,13 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
     v0 = COULOMB_START if COULOMB_START in vs else vs[len(vs) // 2]
     arm_opts = tuple(dict.fromkeys(bool(a) for a in armature))
     arm0 = arm_opts[-1]
+    shares = tuple(dict.fromkeys(float(x) for x in np.atleast_1d(slow_share)))
+    split = max(shares)  # the regimes every candidate is scored on (0: one regime, every row pooled)
     n = robot.n
     rows = []
     cache = {}
 
-    def run(fc, vel, v_s, weights, arm):
+    def run(fc, vel, v_s, weights, arm, share_list=shares[:1]):
         prep, LY, PY, th, memo = cache[(fc, vel)]
         ks = tuple(kinds) + (("armature",) if arm else ())
         cols = kept_columns(ks, n, merged)
@@ -307,15 +335,21 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         qp, qdp, qddp = (X[th] for X in prep.predict)
         P = np.concatenate([PY, joint_columns(qdp, qddp, ks, v_s)[:, :, cols]], axis=2)
         train = (prep.usable & (prep.t <= t_split))[th]
-        keep = slow_rows(prep.qd[th], train, slow_share)
-        res = cv_scores(A * keep[:, :, None], prep.tau[th] * keep, P, prep.tau_raw[th], prep.t[th], train, fc,
-                        weights, folds, slow=keep == 0)
+        regimes = slow_rows(prep.qd[th], train, split) == 0
         out = []
-        for w in weights:
-            row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
-                   "armature": bool(arm), "rms": [float(r) for r in res[w]], "score": _score(res[w])}
-            rows.append(row)
-            out.append(row)
+        for share in share_list:
+            keep = slow_rows(prep.qd[th], train, share)
+            res = cv_scores(A * keep[:, :, None], prep.tau[th] * keep, P, prep.tau_raw[th], prep.t[th], train, fc,
+                            weights, folds, slow=regimes, how=("pooled" if share == 0 else SLOW_SCORE, "balanced"))
+            for w in weights:
+                own = res[w][0]
+                row = {"cutoff_hz": float(fc), "velocities": vel, "weighting": w, "coulomb_velocity": float(v_s),
+                       "armature": bool(arm), "slow_share": share, "rms": [float(r) for r in own],
+                       "score": _score(own)}
+                if len(shares) > 1:
+                    row |= {"regime_rms": [float(r) for r in res[w][1]], "regime_score": _score(res[w][1])}
+                rows.append(row)
+                out.append(row)
         return out
 
     multi = TWO_STAGE and len(vs) > 1 and (len(cutoffs) > 1 or len(velocities) > 1)
@@ -327,7 +361,8 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
             return None
         if RULE == "geometric-mean":
             return min(ok, key=lambda r: r["score"])
-        ref = np.min([r["rms"] for r in rows if np.isfinite(r["score"])], axis=0)
+        ref = np.min([r["rms"] for r in rows if np.isfinite(r["score"]) and r["slow_share"] == ok[0]["slow_share"]],
+                     axis=0)
         return min(ok, key=lambda r: (round(float(np.max(np.asarray(r["rms"]) / ref)), 12), r["score"]))
 
     for vel in velocities:
@@ -351,15 +386,20 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
             if v_s != v0:
                 run(fc, vel, v_s, weightings, arm0)
         top = pick([r for r in rows if r["cutoff_hz"] == fc and r["velocities"] == vel])
-    best = (top, None)
     for arm in arm_opts:
         if arm != arm0:
             other = min(run(fc, vel, top["coulomb_velocity"], weightings, arm), key=lambda r: r["score"])
             with_arm, without = (other, top) if arm else (top, other)
-            best = (with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without, None)
-    chosen = {k: best[0][k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature",
-                                      "score")}
-    lo = min(float(r["score"]) for r in rows)
+            top = with_arm if with_arm["score"] < (1.0 - ARMATURE_GAIN) * without["score"] else without
+    best = top
+    if len(shares) > 1:  # the other shares at the chosen settings, all on the same rows in the same two regimes
+        same = run(fc, vel, top["coulomb_velocity"], (top["weighting"],), top["armature"], shares[1:])
+        best = min([top] + same, key=lambda r: r["regime_score"])
+    chosen = {k: best[k] for k in ("cutoff_hz", "velocities", "weighting", "coulomb_velocity", "armature",
+                                   "slow_share", "score")}
+    if len(shares) > 1:
+        chosen["regime_score"] = best["regime_score"]
+    lo = min(float(r["score"]) for r in rows if r["slow_share"] == best["slow_share"])
     stages = ("stage 1: every cut-off x velocity source x weighting at v_s = "
               f"{v0:g} rad/s, stage 2: every v_s x weighting at the chosen cut-off and source" if multi
               else "every candidate setting") + (
@@ -369,6 +409,11 @@ def select(robot, log, kinds, t_split: float, cutoffs, velocities, weightings, c
         stages += (f" (with{'' if arm0 else 'out'} a rotor inertia per joint), then every weighting "
                    f"with{'out' if arm0 else ''} it at the chosen settings; the rotor inertias are kept only "
                    f"when they lower the best score by more than {100 * ARMATURE_GAIN:g} %")
+    if len(shares) > 1:
+        stages += (f"; every row fitted (slow share {shares[0]:g}), then at the chosen settings the fit without each "
+                   "joint's rows slower than " + ", ".join(f"{x:g}" for x in shares[1:]) + " x its RMS speed; of "
+                   "these the lowest regime_score: each joint's RMS the geometric mean of its RMS over its rows "
+                   f"slower than {split:g} x its RMS speed and over the others (the same rows for every share)")
     return {"chosen": chosen, "candidates": rows, "folds": int(folds), "best_score": lo,
             "stage1_coulomb_velocity": float(v0) if multi else None, "rule": RULE,
             "method": (f"blocked cross-validation on the training part: {folds} contiguous blocks; each block's "
