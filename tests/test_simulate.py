@@ -385,8 +385,8 @@ def test_xarm7_with_its_urdf_damping_no_longer_diverges():
     on sub-steps from the stiffness (7.4e5 1/s: 738 per period) FBL runs and agrees with the reference
     engine to 1e-8 rad over 0.1 s (measured 4.3e-11 over 0.5 s); so does the default, SDIRK3 per period
     (``sampled_method = "auto"``), to 1e-7 rad (measured 1.02e-8 with the knee's error control, which judges
-    a step's velocity error over the rest of its period: 10x under issue 37's 1e-6 rad bar, and the periods'
-    own tolerance 1e-4 on 1 ms), on under a fifth of RK4's right-hand sides (ROS4 periods, the default
+    a step's velocity error over the rest of its period: 10x under issue 37's 1e-6 rad bar; at period_rtol
+    1e-4, SDIRK3's default then, now 1e-5), on under a fifth of RK4's right-hand sides (ROS4 periods, the default
     before: 19x fewer at 500 Hz and 8.8x at 1 kHz, benchmarks/stiff_plant.py; SDIRK3 fewer still,
     docs/performance.md)."""
     import dataclasses
