@@ -19,6 +19,7 @@ verdict count, ``ok`` and recommendation are identical. Run the methods' command
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import os
 import subprocess
@@ -65,6 +66,43 @@ def compare(a: dict, b: dict) -> tuple[float, float, bool, list]:
     return worst, base, same, diffs
 
 
+def _config(method: str) -> str:
+    """The ``[simulation]`` config of a ``--methods`` entry ``NAME`` or ``NAME@RTOL/ATOL``; below rtol 1e-6 (a
+    reference design) ``max_steps`` 1e9 too, so that no period runs out of steps (the default budget stops
+    the xArm7's first period at rtol 1e-8)."""
+    name, _, tol = method.partition("@")
+    text = f'[simulation]\nsampled_method = "{name}"\n'
+    if tol:
+        rtol, atol = (float(x) for x in tol.split("/"))
+        text += f"period_rtol = {rtol!r}\nperiod_atol = {atol!r}\n" + ("max_steps = 1e9\n" if rtol < 1e-6 else "")
+    return text
+
+
+def run_errors(where: Path) -> dict:
+    """``{(job, plant): (max_error [rad], verdict, t_end [s])}`` of a design's ``runs.csv``."""
+    with open(where / "runs.csv", newline="") as f:
+        return {(r["job"], r["plant"]): (float(r["max_error"]), r["verdict"], r["t_end"]) for r in csv.DictReader(f)}
+
+
+def compare_runs(a: dict, b: dict) -> tuple[float, float, int]:
+    """Largest |difference| of the runs' ``max_error`` [rad] between two designs' :func:`run_errors`, over the
+    runs clean in both and over the others (limit-violated, saturated, ...), and how many verdicts differ
+    (runs that end at different times are counted there, their errors not compared)."""
+    clean, other, nv = 0.0, 0.0, 0
+    for k, (ea, va, ta) in a.items():
+        if k not in b:
+            continue
+        eb, vb, tb = b[k]
+        nv += va != vb or ta != tb
+        if ta != tb:
+            continue
+        if va == vb == "clean":
+            clean = max(clean, abs(ea - eb))
+        else:
+            other = max(other, abs(ea - eb))
+    return clean, other, nv
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--arms", default="xarm7,z1")
@@ -73,8 +111,13 @@ def main(argv=None) -> int:
     p.add_argument("--duration", type=float, default=2.0)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--methods", default="ros4,sdirk", help="sampled methods; the first is the baseline")
+    p.add_argument("--methods", default="ros4,sdirk",
+                   help="sampled methods, each NAME or NAME@RTOL/ATOL (the period tolerances); the first is the baseline")
+    p.add_argument("--ref", default=None, help="also compare every method's runs with this one's (a --methods entry, "
+                                               "e.g. a tight-tolerance design), printed after each arm")
     p.add_argument("--out", required=True)
+    p.add_argument("--reuse", action="store_true",
+                   help="a method whose design (and its bench_wall.txt) is already under --out is read, not rerun")
     args = p.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -87,25 +130,31 @@ def main(argv=None) -> int:
     print("|---|---|---|---|---|---|---|---|")
     for arm in args.arms.split(","):
         urdf, lock = D.ARMS[arm]
-        first = None
+        first, done = None, {}
         for m in methods:
-            cfg = out / f"{m}.toml"
-            cfg.write_text(f'[simulation]\nsampled_method = "{m}"\n')
-            where = out / f"{arm}-{m}"
+            cfg = out / f"{m.replace('/', '_')}.toml"
+            cfg.write_text(_config(m))
+            where = out / f"{arm}-{m.replace('/', '_')}"
             cmd = D._rc3r() + ["design", "--urdf", str(D.ROBOTS / urdf)] + \
                 sum((["--lock", f"{j}={v:g}"] for j, v in lock.items()), []) + \
                 ["--payload", "0:3", "--rate", f"{args.rate:g}", "--friction", "urdf", "--torque-limit", "urdf",
                  "--n", str(args.n), "--duration", f"{args.duration:g}", "--seed", str(args.seed),
                  "--workers", str(args.workers), "--config", str(cfg), "--out", str(where), "--force"]
-            t0 = time.perf_counter()
-            proc = subprocess.run(cmd, capture_output=True, text=True)
-            wall = time.perf_counter() - t0
-            (out / f"{arm}-{m}.log").write_text(" ".join(cmd) + "\n" + proc.stdout + proc.stderr)
             path = where / "design.json"
+            if args.reuse and path.exists() and (where / "bench_wall.txt").exists():
+                wall = float((where / "bench_wall.txt").read_text())
+            else:
+                t0 = time.perf_counter()
+                proc = subprocess.run(cmd, capture_output=True, text=True)
+                wall = time.perf_counter() - t0
+                (out / f"{arm}-{m.replace('/', '_')}.log").write_text(" ".join(cmd) + "\n" + proc.stdout + proc.stderr)
+                if path.exists():
+                    (where / "bench_wall.txt").write_text(f"{wall!r}\n")
             if not path.exists():
-                print(f"| {arm} | {m} | {wall:.1f} | | failed (exit {proc.returncode}, {out / f'{arm}-{m}.log'}) | | | |")
+                print(f"| {arm} | {m} | {wall:.1f} | | failed (exit {proc.returncode}, {where}.log) | | | |")
                 continue
             info = json.loads(path.read_text())
+            done[m] = where
             rec = info.get("recommendation") or {}
             we, eps = rec.get("worst_error"), info.get("eps")
             head = (f"{info.get('ok')}, {rec.get('law')} {'-' if we is None else f'{we:.6g}'} rad, "
@@ -118,6 +167,16 @@ def main(argv=None) -> int:
             worst, base, same, diffs = compare(first[1], info)
             print(f"| {arm} | {m} | {wall:.1f} | {wall / first[0]:.3g} | {head} | {worst:.3g} ({base:.3g}) | "
                   f"{'yes' if same else 'NO: ' + str(diffs[:3])} | {os.getloadavg()[0]:.2f} |", flush=True)
+        if args.ref in done:
+            print(f"# {arm}: worst errors against {args.ref}: " + ", ".join(
+                f"{m} {compare(json.loads((done[args.ref] / 'design.json').read_text()), json.loads((w / 'design.json').read_text()))[0]:.3g}"
+                for m, w in done.items() if m != args.ref))
+            ref = run_errors(done[args.ref])
+            for m, where in done.items():
+                if m != args.ref:
+                    c, o, nv = compare_runs(ref, run_errors(where))
+                    print(f"# {arm}: {m} against {args.ref}, per run max|d max_error|: clean runs {c:.3g} rad, "
+                          f"other runs {o:.3g} rad; verdicts differing {nv}", flush=True)
     return 0
 
 
