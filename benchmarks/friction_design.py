@@ -1,4 +1,4 @@
-"""``rc3r design`` on the arms with URDF friction, before (ROS4 periods) and after (RODAS periods), side by side.
+"""``rc3r design`` on the arms with URDF friction, before (ROS4 periods) and after (SDIRK3 periods), side by side.
 
 Issue 37's acceptance command, per arm, once per period method in one run (the method set by a config's
 ``[simulation] sampled_method``, everything else the command's)::
@@ -9,7 +9,9 @@ Issue 37's acceptance command, per arm, once per period method in one run (the m
     python benchmarks/friction_design.py --arms xarm7,z1 --n 4 --duration 2 --workers 2 --out /tmp/fd
     python benchmarks/friction_design.py --n 50 --duration 10 --workers 2 --out FD50   # the issue's size
 
-Prints one row per arm and method: wall time, its ratio to the first method's, the design's verdict
+Prints one row per arm and method: wall time, the CPU time the design used (its process and its workers,
+from ``resource.getrusage``: on a shared machine the wall time grows with the load, the CPU time hardly;
+on an idle one wall ~ CPU / workers plus start-up), the wall's ratio to the first method's, the design's verdict
 (``ok``, the recommended law and its worst error, the layer eps), and the largest difference of any worst
 error in ``design.json`` from the first method's (every ``worst_error`` leaf, paired by path; in brackets
 those of the comparison laws under ``baselines``, FBL and the adaptive law) and whether every
@@ -22,6 +24,7 @@ import argparse
 import csv
 import json
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -103,6 +106,31 @@ def compare_runs(a: dict, b: dict) -> tuple[float, float, int]:
     return clean, other, nv
 
 
+def timed_run(cmd: list) -> tuple[float, float, subprocess.CompletedProcess]:
+    """Run ``cmd`` to its end; its wall time [s], the CPU time [s] it used (user + system of the process and
+    of every descendant it waited for, e.g. a design's worker processes: the growth of
+    ``resource.getrusage(RUSAGE_CHILDREN)`` of this process across the run) and the finished process. On a
+    machine the run has to itself, wall ~ CPU / workers plus the serial start-up; on a shared one wall grows
+    with the load and CPU does not (much)."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime), proc
+
+
+def _read_times(where: Path) -> tuple[float, float]:
+    """Wall and CPU time [s] of a design kept under ``where`` (``--reuse``); CPU NaN if not recorded."""
+    wall = float((where / "bench_wall.txt").read_text())
+    cpu = where / "bench_cpu.txt"
+    return wall, float(cpu.read_text()) if cpu.exists() else float("nan")
+
+
+def _cpu(cpu: float) -> str:
+    return "-" if cpu != cpu else f"{cpu:.1f}"
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--arms", default="xarm7,z1")
@@ -124,10 +152,10 @@ def main(argv=None) -> int:
     methods = args.methods.split(",")
     print(f"# friction designs, {time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime())} UTC, rate {args.rate:g} Hz, "
           f"n {args.n}, duration {args.duration:g} s, workers {args.workers}, load {os.getloadavg()[0]:.2f}")
-    print("| arm | sampled method | wall [s] | wall ratio | design ok, law, eps | max\\|d worst error\\| [rad] "
+    print("| arm | sampled method | wall [s] | CPU [s] | wall ratio | design ok, law, eps | max\\|d worst error\\| [rad] "
           "(baselines) "
           "| verdicts identical | load at end |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|")
     for arm in args.arms.split(","):
         urdf, lock = D.ARMS[arm]
         first, done = None, {}
@@ -142,16 +170,15 @@ def main(argv=None) -> int:
                  "--workers", str(args.workers), "--config", str(cfg), "--out", str(where), "--force"]
             path = where / "design.json"
             if args.reuse and path.exists() and (where / "bench_wall.txt").exists():
-                wall = float((where / "bench_wall.txt").read_text())
+                wall, cpu = _read_times(where)
             else:
-                t0 = time.perf_counter()
-                proc = subprocess.run(cmd, capture_output=True, text=True)
-                wall = time.perf_counter() - t0
+                wall, cpu, proc = timed_run(cmd)
                 (out / f"{arm}-{m.replace('/', '_')}.log").write_text(" ".join(cmd) + "\n" + proc.stdout + proc.stderr)
                 if path.exists():
                     (where / "bench_wall.txt").write_text(f"{wall!r}\n")
+                    (where / "bench_cpu.txt").write_text(f"{cpu!r}\n")
             if not path.exists():
-                print(f"| {arm} | {m} | {wall:.1f} | | failed (exit {proc.returncode}, {where}.log) | | | |")
+                print(f"| {arm} | {m} | {wall:.1f} | {cpu:.1f} | | failed (exit {proc.returncode}, {where}.log) | | | |")
                 continue
             info = json.loads(path.read_text())
             done[m] = where
@@ -161,11 +188,11 @@ def main(argv=None) -> int:
                     f"eps {'-' if eps is None else f'{eps:.4g}'}")
             if first is None:
                 first = (wall, info)
-                print(f"| {arm} | {m} | {wall:.1f} | 1 | {head} | (baseline) | | {os.getloadavg()[0]:.2f} |",
+                print(f"| {arm} | {m} | {wall:.1f} | {_cpu(cpu)} | 1 | {head} | (baseline) | | {os.getloadavg()[0]:.2f} |",
                       flush=True)
                 continue
             worst, base, same, diffs = compare(first[1], info)
-            print(f"| {arm} | {m} | {wall:.1f} | {wall / first[0]:.3g} | {head} | {worst:.3g} ({base:.3g}) | "
+            print(f"| {arm} | {m} | {wall:.1f} | {_cpu(cpu)} | {wall / first[0]:.3g} | {head} | {worst:.3g} ({base:.3g}) | "
                   f"{'yes' if same else 'NO: ' + str(diffs[:3])} | {os.getloadavg()[0]:.2f} |", flush=True)
         if args.ref in done:
             print(f"# {arm}: worst errors against {args.ref}: " + ", ".join(
