@@ -145,6 +145,33 @@ def test_sampled_method_is_checked_and_resolved(plant):
     assert plant_method(stiff.true_plant, dataclasses.replace(o, sampled_method="rk4")) == "rk4"
 
 
+def test_period_tolerances_default_to_the_resolved_methods_own():
+    """SimOptions.period_rtol/period_atol left at None resolve with the sampled method (steps._resolve_steps):
+    SDIRK3 periods 1e-5, 1e-7 (issue 37: a design's worst errors within 1e-6 rad, tests/test_design.py),
+    ROS4 and RODAS 1e-4, 1e-6 (their values before); a given tolerance stands; continuous mode leaves them
+    None; 0 or a string is refused with one ParameterError naming the option."""
+    import dataclasses
+
+    import rc3r
+    from rc3r.simulate.steps import _resolve_steps
+
+    stiff = rc3r.build_run(robot="ur5", controller="fbl", rate=1000.0, duration=0.1, friction=(0.5, 10.0))
+    p, o = stiff.true_plant, stiff.options
+    assert o.period_rtol is None and o.period_atol is None
+    r = _resolve_steps(p, o)
+    assert (r.sampled_method, r.period_rtol, r.period_atol) == ("sdirk", 1e-5, 1e-7)
+    for m in ("ros4", "rodas"):
+        r = _resolve_steps(p, dataclasses.replace(o, sampled_method=m))
+        assert (r.period_rtol, r.period_atol) == (1e-4, 1e-6)
+    r = _resolve_steps(p, dataclasses.replace(o, period_rtol=3e-4))
+    assert (r.period_rtol, r.period_atol) == (3e-4, 1e-7)
+    assert _resolve_steps(p, dataclasses.replace(o, rate=None)).period_rtol is None
+    with pytest.raises(ParameterError, match="period_rtol must be finite and > 0, got 0"):
+        SimOptions(period_rtol=0.0)
+    with pytest.raises(ParameterError, match="period_atol"):
+        SimOptions(period_atol="tight")
+
+
 def test_sampled_fast_matches_reference(plant, bounds):
     """Sampled mode (1 kHz ZOH, FBL): RK4 sub-steps vs DOP853 on the ABA plant agree to 1e-8 rad."""
     ctrl = FeedbackLinearization(bounds.theta0)
@@ -358,8 +385,8 @@ def test_xarm7_with_its_urdf_damping_no_longer_diverges():
     on sub-steps from the stiffness (7.4e5 1/s: 738 per period) FBL runs and agrees with the reference
     engine to 1e-8 rad over 0.1 s (measured 4.3e-11 over 0.5 s); so does the default, SDIRK3 per period
     (``sampled_method = "auto"``), to 1e-7 rad (measured 1.02e-8 with the knee's error control, which judges
-    a step's velocity error over the rest of its period: 10x under issue 37's 1e-6 rad bar, and the periods'
-    own tolerance 1e-4 on 1 ms), on under a fifth of RK4's right-hand sides (ROS4 periods, the default
+    a step's velocity error over the rest of its period: 10x under issue 37's 1e-6 rad bar; at period_rtol
+    1e-4, SDIRK3's default then, now 1e-5), on under a fifth of RK4's right-hand sides (ROS4 periods, the default
     before: 19x fewer at 500 Hz and 8.8x at 1 kHz, benchmarks/stiff_plant.py; SDIRK3 fewer still,
     docs/performance.md)."""
     import dataclasses

@@ -99,12 +99,11 @@ class SimOptions:
         every sample up to this rate, decimating above it).
     rtol, atol : float
         Integrator tolerances (continuous mode), mixed relative/absolute per state.
-    period_rtol, period_atol : float
-        Tolerances of the implicit periods (``sampled_method`` ``"sdirk"``, ``"ros4"``, ``"rodas"``): 1e-4 and
-        1e-6, set for ROS4, whose embedded estimate is not L-stable and counts a damped transient as error, so
-        the measured error is far below them (within 4.5e-9 rad of the reference engine over 0.3 s of the
-        robust law on the xArm7 and the Z1 with their URDF friction, 5.5-6.7x fewer right-hand sides than at
-        1e-6 / 1e-8; ``benchmarks/stiff_plant.py``, docs/control.md).
+    period_rtol, period_atol : float or None
+        Tolerances of the implicit periods (``sampled_method`` ``"sdirk"``, ``"ros4"``, ``"rodas"``); ``None``
+        (default): the resolved method's own, :data:`rc3r.simulate.steps.PERIOD_TOLERANCES` (measured there),
+        which :func:`simulate` returns: SDIRK3 1e-5, 1e-7 (issue 37's 1e-6 rad on a design's worst errors),
+        ROS4 and RODAS 1e-4, 1e-6 (docs/control.md, "Stiff friction: implicit periods").
     nsub : int or None
         RK4 sub-steps per sampling period (sampled mode); default: chosen by :func:`simulate`
         from the plant (:func:`default_substeps`: steps of at most 1 ms for a rigid body, 0.25 ms
@@ -152,8 +151,8 @@ class SimOptions:
     output_rate: float = 1000.0
     rtol: float = 1e-6
     atol: float = 1e-8
-    period_rtol: float = 1e-4
-    period_atol: float = 1e-6
+    period_rtol: float | None = None
+    period_atol: float | None = None
     nsub: int | None = None
     sampled_method: str = "auto"
     engine: str = "auto"
@@ -167,6 +166,8 @@ class SimOptions:
     def __post_init__(self):
         for name in ("duration", "output_rate", "rtol", "atol", "period_rtol", "period_atol", "max_steps", "q_max",
                      "qd_max", "u_max"):
+            if getattr(self, name) is None and name.startswith("period_"):
+                continue  # the method's own (steps.PERIOD_TOLERANCES)
             x = _real(name, getattr(self, name))
             if not (np.isfinite(x) and x > 0):
                 raise ParameterError(f"{name} must be finite and > 0, got {getattr(self, name)}")

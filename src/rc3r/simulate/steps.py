@@ -35,6 +35,14 @@ STIFF_STEP = 1.0
 #: steps made it diverge; 0.25 ms ones agree with the reference engine, max|e| 1.2683 rad).
 MAX_STEP_ANGLE = 0.02
 
+#: Default ``(period_rtol, period_atol)`` of the implicit periods per resolved ``sampled_method``
+#: (:attr:`SimOptions.period_rtol` ``None``; ``"rk4"`` gets ROS4's, unused). ROS4 and RODAS 1e-4, 1e-6
+#: (docs/control.md). SDIRK3 1e-5, 1e-7 (issue 37, docs/performance.md "The design's worst errors at the
+#: periods' tolerance"): at 1e-4 its xArm7 design (n 4, 2 s) moved a worst error 4.0e-6 rad from the same
+#: design at 1e-8 (ROS4 at 1e-4: 3.8e-7), on a torque-saturated plant that leaves the joint limits (the
+#: loop amplifies the periods' errors there); at 1e-5 4.0e-7 (2e-5: 7.9e-7, 3e-5: 1.1e-6).
+PERIOD_TOLERANCES = {"sdirk": (1e-5, 1e-7), "ros4": (1e-4, 1e-6), "rodas": (1e-4, 1e-6)}
+
 
 def _too_fast(res, opt) -> bool:
     """True if a sampled run on default sub-steps did not finish or moved more than
@@ -80,15 +88,19 @@ def continuous_method(law, options):
 
 
 def _resolve_steps(plant, options):
-    """``options`` with ``nsub`` (:func:`default_substeps`) and ``sampled_method`` (:func:`plant_method`)
-    decided for a sampled run on ``plant``; unchanged in continuous mode."""
+    """``options`` with ``nsub`` (:func:`default_substeps`), ``sampled_method`` (:func:`plant_method`) and the
+    period tolerances left at ``None`` (:data:`PERIOD_TOLERANCES` of the method) decided for a sampled run on
+    ``plant``; unchanged in continuous mode."""
     if options.rate is None:
         return options
     lam = stiffness(plant)  # once for both decisions
     method = plant_method(plant, options, lam)
     if options.nsub is None:
         options = replace(options, nsub=default_substeps(plant, options.rate, lam))
-    return replace(options, sampled_method=method)
+    rtol, atol = PERIOD_TOLERANCES.get(method, PERIOD_TOLERANCES["ros4"])
+    return replace(options, sampled_method=method,
+                   period_rtol=rtol if options.period_rtol is None else options.period_rtol,
+                   period_atol=atol if options.period_atol is None else options.period_atol)
 
 
 def default_substeps(plant, rate: float, lam: float | None = None) -> int:
