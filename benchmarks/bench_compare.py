@@ -98,9 +98,11 @@ def main(argv=None) -> int:
     keys = [k for k in lb[0] if all(k in x for x in lb + la)]
     if a.only == "ratio":
         keys = [k for k in keys if any(s in k for s in _RATIO)]
-    skip = ("/settings/", "/machine/", "/n_states", "/repeats", "/tol", "/states", "/target", "/duration_s",
-            "max_abs_ref")
-    keys = [k for k in keys if not any(s in k for s in skip)]
+    # settings and the run's own description, not measurements: whole sections, and leaves by their last name
+    # (a whole-path substring would also drop targets/<name>/measured with the targets' limit "target")
+    sections = ("/settings/", "/machine/")
+    names = {"n_states", "repeats", "tol", "states", "target", "duration_s", "max_abs_ref"}
+    keys = [k for k in keys if not k.startswith(sections) and k.rsplit("/", 1)[-1] not in names]
     print(f"rc3r bench side by side: before {trees['before']} | after {trees['after']}; "
           f"{len(lb)} round(s) each{' (quick)' if a.quick else ''}; medians; "
           f"loads at the ends {[round(d['_process']['load_end'], 1) for d in runs['before'] + runs['after']]}")
