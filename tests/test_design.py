@@ -517,3 +517,61 @@ def test_xarm7_design_on_default_periods_matches_a_tight_ros4_design(tmp_path):
     assert all(ra[j][1:3] == rb[j][1:3] for j in ra)  # verdict and end time per run
     d = max(abs(ra[j][0] - rb[j][0]) for j in ra)
     assert d <= 1e-6, d
+
+
+# ---- the defaults' spectrum: the controller's model as well as the robot (issue 35) ------------------
+
+def _light_wrist_ur5(scale: float = 0.1):
+    """The UR5 and a copy whose last body is ``scale`` times as heavy (mass and inertia about the CoM scaled,
+    CoM kept: a physical body), built as its own Pinocchio model; its base coefficients theta_0 and that model."""
+    import pinocchio as pin
+
+    ur5 = rc3r.load_robot("ur5")
+    model = ur5._model.copy()
+    k = model.njoints - 1
+    model.inertias[k] = pin.Inertia(scale * model.inertias[k].mass, model.inertias[k].lever,
+                                    scale * model.inertias[k].inertia)
+    std = np.concatenate([model.inertias[i].toDynamicParameters() for i in range(1, model.njoints)])
+    return ur5, ur5.theta_of_standard(std), model
+
+
+def _held_loop_figure(model, ur5, traj, theta0, gains, rho_i, rate, margin, duration):
+    """max over the reference of (margin / rate) lambda_max(M^-1 G), G = b M + Y diag(rho_i / eps_i) Y^T,
+    with M from ``pinocchio.crba`` on ``model`` (the plant is the controller's model theta_0)."""
+    import pinocchio as pin
+
+    data = model.createData()
+    W = np.asarray(rho_i) / gains["eps_i"]
+    worst = 0.0
+    for t in np.linspace(0.0, duration, 81):
+        q, qd, qdd = traj.evaluate(t)
+        M = pin.crba(model, data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        Y = ur5.regressor(q, qd, qd, qdd)
+        G = gains["K_inertia"] * M + (Y * W) @ Y.T
+        worst = max(worst, np.max(np.linalg.eigvals(np.linalg.solve(M, G)).real))
+    return margin / rate * worst
+
+
+def test_default_gains_hold_the_loop_on_a_controller_model_lighter_than_the_robot():
+    """A run's default gains (``sampled_gains``) when theta_0 is 10x lighter than the robot in its last body
+    (as the real Panda's wrist against its URDF): T' lambda_max(M_0^-1 G) <= 1 (the rule's oscillation-free
+    target at rate / margin), with M_0 from pinocchio.crba on the light model itself and G built from the
+    gains. Gains designed on the robot's M alone (theta_0 = the robot's theta: the rule before) put the
+    same figure above 1 on the light model: the lighter model must be in the spectrum."""
+    from rc3r.design.rule import DEFAULT_MARGIN
+
+    ur5, theta0, light = _light_wrist_ur5(0.1)
+    np.testing.assert_allclose(ur5.regressor(*(np.full(6, 0.3),) * 4) @ theta0,
+                               __import__("pinocchio").rnea(light, light.createData(), *(np.full(6, 0.3),) * 3),
+                               atol=1e-9)  # theta_0 is the light model's, by Pinocchio
+    traj, rate, dur = ur5.default_trajectory(), 1000.0, 2.0
+    rho_i = 0.2 * np.abs(theta0) + 1e-3
+    gains, _ = sampled_gains("robust-coeff", ur5, traj, {"theta0": list(theta0), "rho_i": list(rho_i)}, rate,
+                             duration=dur)
+    fig = _held_loop_figure(light, ur5, traj, theta0, gains, rho_i, rate, DEFAULT_MARGIN, dur)
+    assert fig <= 1.0 + 1e-6
+    heavy, _ = sampled_gains("robust-coeff", ur5, traj, {"theta0": list(ur5.theta), "rho_i": list(rho_i)}, rate,
+                             duration=dur)
+    assert gains["eps_i"] > heavy["eps_i"]
+    assert _held_loop_figure(light, ur5, traj, theta0, heavy, rho_i, rate, DEFAULT_MARGIN, dur) > 1.0

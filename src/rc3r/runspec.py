@@ -297,11 +297,11 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
     ``noise``, ``delay``, ``plant_engine`` and the ``[plant]`` table's effect keys build the true
     plant and its loop (:func:`rc3r.plants.resolve`); ``effects`` (``[plant]`` keys of registered effects,
     e.g. the command line's, :func:`rc3r.cli.run.plant_options`) win over the table's; ``tolerance`` [rad] is
-    the verdict's.
-    ``bounds`` (or config ``bounds``) is a ``bounds.toml`` of ``rc3r identify``: the controller's
-    theta_0, rho, rho_i and ellipsoid P come from it (:func:`_file_model`); the plant is the nominal
-    robot, a URDF, or drawn from the file's ellipsoid (``centre``, ``random:<seed>``,
-    ``boundary:<seed>``: :func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`).
+    the verdict's. ``bounds`` (or config ``bounds``) is a ``bounds.toml`` of ``rc3r identify``: the controller's
+    theta_0, rho, rho_i and ellipsoid P come from it (:func:`_file_model`); the plant is by default the file's
+    centre when it has link parameters (``[physical]``: the identified robot), else the nominal robot; or a URDF,
+    ``nominal``, or drawn from the ellipsoid (``random:<seed>``, ``boundary:<seed>``:
+    :func:`rc3r.uncertainty.ellipsoid.draw_from_ellipsoid`).
     """
     cfg = config or {}
     _check_config(cfg, controller)
@@ -326,6 +326,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
 
     box_bounds.urdf_uncertainty = _urdf_spec(plant_cfg.get("urdf_uncertainty"))  # checked; None: none
     spec = plant or plant_cfg.get("spec", "nominal")
+    default_plant = plant is None and not {"spec", "urdf"} & set(plant_cfg)  # bounds with a physical centre: it
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])
     if spec == "random":
@@ -341,6 +342,8 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
         from .identify.bounds_file import load_bounds
 
         bounds_file = load_bounds(bounds_path, robot=nominal)  # read once: for the plant and for the model
+        if default_plant and file_model and bounds_file.get("physical") is not None:
+            spec = "centre"  # the identified robot the bounds are about, not the URDF's (docs/control.md)
         _check_bounds_robot(bounds_file, robot or cfg.get("robot"),
                             urdf if urdf is not None else cfg.get("urdf"))
         if file_model:  # before any plant is drawn from it: a centre that is no rigid body is refused first
@@ -420,13 +423,11 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
 
 def _tolerance(tol) -> float | None:
     """The verdict's tracking tolerance [rad]: None, or a finite number > 0 (ParameterError otherwise)."""
-    if tol is None:
-        return None
-    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.integer, np.floating)):
+    if tol is not None and (isinstance(tol, bool) or not isinstance(tol, (int, float, np.integer, np.floating))):
         raise ParameterError(f"tolerance must be a number of rad, got {tol!r}")
-    if not (np.isfinite(tol) and tol > 0):
+    if tol is not None and not (np.isfinite(tol) and tol > 0):
         raise ParameterError(f"tolerance must be finite and > 0 rad, got {tol!r}")
-    return float(tol)
+    return None if tol is None else float(tol)
 
 
 def _joint_outside(act: dict) -> str | None:
@@ -437,13 +438,12 @@ def _joint_outside(act: dict) -> str | None:
     """
     p = int(act["rigid_p"])
     th, ri = np.asarray(act["theta0"], float)[p:], np.asarray(act["rho_i"], float)[p:]
-    ratio = np.abs(th) / np.maximum(ri, 1e-300)
-    k = int(np.argmax(ratio))
+    k = int(np.argmax(ratio := np.abs(th) / np.maximum(ri, 1e-300)))
     if ratio[k] <= 1.0:
         return None
     name = list(act["coefficient_names"])[p + k]
     return (f"the plant has no joint friction but the bounds' centre has: {name} = {th[k]:.3g} is {ratio[k]:.3g} "
-            f"rho_i from 0, so the law compensates friction this plant lacks (--plant centre runs the identified arm)")
+            f"rho_i from 0, so the law compensates friction this plant lacks (the default plant, centre, is the identified arm)")
 
 
 def _check_bounds_robot(bf: dict, robot: str | None, urdf) -> None:

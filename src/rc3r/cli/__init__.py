@@ -246,7 +246,9 @@ def build_parser() -> argparse.ArgumentParser:
                                   "corner:<30 bits>, random:<seed> (of the box), or a URDF path")
     r.add_argument("--box", help="box TOML: the plant's box and the controller's bounds (default: the paper's box)")
     r.add_argument("--bounds", metavar="FILE", help="bounds.toml of rc3r identify: the controller's theta_0, rho, "
-                                                   "rho_i and ellipsoid (the plant: the nominal robot or --plant)")
+                                                   "rho_i and ellipsoid (the plant: the file's centre, the "
+                                                   "identified robot; or --plant: nominal, random:<seed>, "
+                                                   "boundary:<seed>)")
     r.add_argument("--robot", help=f"a registered robot ({', '.join(ROBOTS)}; default: config, else rr3)")
     r.add_argument("--payload", type=_interval, metavar="LO:HI",
                    help="unknown payload mass on the last link [kg]: the plant carries HI (see --plant); the "

@@ -164,32 +164,39 @@ def spectrum(robot, trajectory, duration: float = 10.0, *, scaling: str = "free"
     """Sample the model ``robot`` along ``trajectory`` over [0, duration] (every 0.025 s, 101 to 2001 samples).
 
     ``robot`` is the controller's model (its M; for a payload the arm without it, the lightest plant when
-    the range starts at 0). Raises ParameterError for a mass matrix that is not positive definite.
+    the range starts at 0), or a sequence of models of one arm (same kinematics, e.g. the robot's own
+    parameters and the controller's theta_0, :class:`ThetaModel`): the samples of every model are
+    stacked, so every ``max_t`` of the rule is also a maximum over the models and a design holds on each
+    (``kappa`` and ``M0``, the units of a constant K and of PD, are the first model's).
+    Raises ParameterError for a mass matrix that is not positive definite.
     """
     if scaling not in ("free", "diag"):
         raise ParameterError(f"scaling must be 'free' or 'diag', got {scaling!r}")
     if not (np.isfinite(duration) and duration > 0):
         raise ParameterError(f"duration must be finite and > 0, got {duration!r}")
+    models = list(robot) if isinstance(robot, (list, tuple)) else [robot]
     N = samples or int(np.clip(round(40 * duration) + 1, 101, 2001))
     t = np.linspace(0.0, float(duration), N)
     qd, vd, ad = trajectory.evaluate(t)
-    Ls, Ys, dmax = [], [], np.zeros(robot.n)
+    Ls, Ys, ts, dmax = [], [], [], np.zeros(models[0].n)
     lo, hi = np.inf, 0.0
-    for k in range(N):
-        M = robot.mass_matrix(qd[k])
-        try:
-            L = np.linalg.cholesky(M)
-        except np.linalg.LinAlgError:
-            raise ParameterError(f"the model's mass matrix is not positive definite at t = {t[k]:g} s") from None
-        Li = np.linalg.inv(L)  # M^-1 = Li^T Li
-        Ls.append(Li)
-        Ys.append(robot.regressor(qd[k], vd[k], vd[k], ad[k]))
-        ev = np.linalg.eigvalsh(M)
-        lo, hi = min(lo, ev[0]), max(hi, ev[-1])
-        dmax = np.maximum(dmax, np.sum(Li * Li, axis=0))  # (M^-1)_jj = sum_i Li_ij^2
-    M0 = robot.mass_matrix(qd[0])
+    for model in models:
+        for k in range(N):
+            M = model.mass_matrix(qd[k])
+            try:
+                L = np.linalg.cholesky(M)
+            except np.linalg.LinAlgError:
+                raise ParameterError(f"the model's mass matrix is not positive definite at t = {t[k]:g} s") from None
+            Li = np.linalg.inv(L)  # M^-1 = Li^T Li
+            Ls.append(Li)
+            Ys.append(model.regressor(qd[k], vd[k], vd[k], ad[k]))
+            ts.append(t[k])
+            ev = np.linalg.eigvalsh(M)
+            lo, hi = min(lo, ev[0]), max(hi, ev[-1])
+            dmax = np.maximum(dmax, np.sum(Li * Li, axis=0))  # (M^-1)_jj = sum_i Li_ij^2
+    M0 = models[0].mass_matrix(qd[0])
     kappa = 1.0 / np.diag(np.linalg.inv(M0)) if scaling == "free" else np.diag(M0).copy()
-    return Spectrum(t, np.array(Ls), np.array(Ys), kappa, scaling, float(lo), float(hi), dmax, M0.copy())
+    return Spectrum(np.array(ts), np.array(Ls), np.array(Ys), kappa, scaling, float(lo), float(hi), dmax, M0.copy())
 
 
 @dataclass(frozen=True)
@@ -360,6 +367,16 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
     return math.nan
 
 
+def _models(robot, theta0) -> list:
+    """The models whose M the rule's spectrum spans: ``robot``, and its kinematics with ``theta0`` if that differs."""
+    if theta0 is None:
+        return [robot]
+    th = np.asarray(theta0, dtype=float)
+    if th.shape != (robot.p,) or np.array_equal(th, np.asarray(robot.theta, dtype=float)):
+        return [robot]
+    return [robot, ThetaModel(robot, th, "the controller's theta_0")]
+
+
 #: Fast designs already computed in this process (campaign workers build many runs of one arm).
 _CACHE: dict = {}
 
@@ -373,6 +390,11 @@ def sampled_gains(kind: str, robot, trajectory, model: dict, rate: float, *, del
     with margin 1 the unverified eps of eq. 6 diverged on the xArm7 with a 0-3 kg payload at 500 Hz
     and 1 kHz, docs/design.md); ``note`` says which. ``(None, None)`` for a law the
     rule does not design.
+
+    The rule's spectrum is taken over the robot's own parameters *and* the controller's model
+    (``robot``'s kinematics with ``model["theta0"]``, :class:`ThetaModel`) when they differ: the held loop
+    is stiffest on the lighter of the two along each direction, and either may be the plant (an identified
+    arm's theta_0 and its URDF differ by 5-20x in the Panda's wrist, docs/design.md).
     """
     from ..controllers import make_law
 
@@ -386,9 +408,10 @@ def sampled_gains(kind: str, robot, trajectory, model: dict, rate: float, *, del
            float(duration), float(margin), rho, None if rho_i is None else tuple(rho_i),
            tuple(model.get("theta0") or ()))
     if key not in _CACHE:
-        spec = _CACHE.get(key[1:7] + key[9:10])
+        skey = key[1:7] + key[9:10] + key[-1:]
+        spec = _CACHE.get(skey)
         if spec is None:
-            spec = _CACHE[key[1:7] + key[9:10]] = spectrum(robot, trajectory, duration)
+            spec = _CACHE[skey] = spectrum(_models(robot, model.get("theta0")), trajectory, duration)
         default = make_law(kind, model["theta0"], rho=rho, rho_i=rho_i)
         fig = check(default, spec, rate, delay, margin)
         if fig <= 1.0:
