@@ -554,14 +554,16 @@ def _held_loop_figure(model, ur5, traj, theta0, gains, rho_i, rate, margin, dura
 
 
 def test_default_gains_hold_the_loop_on_a_controller_model_lighter_than_the_robot():
-    """A run's default gains (``sampled_gains``) when theta_0 is 10x lighter than the robot in its last body
-    (as the real Panda's wrist against its URDF): T' lambda_max(M_0^-1 G) <= 1 (the rule's oscillation-free
+    """A run's default gains (``sampled_gains``) when theta_0 is 50x lighter than the robot in its last body
+    (the real Panda's wrist is 5-20x lighter than its URDF in some directions; the UR5's last body is light
+    already, so at 10x the robot's own spectrum still leads by 1 %): T' lambda_max(M_0^-1 G) <= 1 (the rule's oscillation-free
     target at rate / margin), with M_0 from pinocchio.crba on the light model itself and G built from the
     gains. Gains designed on the robot's M alone (theta_0 = the robot's theta: the rule before) put the
-    same figure above 1 on the light model: the lighter model must be in the spectrum."""
+    same figure above 1 on the light model (measured 2.22): the lighter model must be in the spectrum.
+    Tolerance 1e-6: the designed figure is 1 at its worst sample up to eigensolver rounding (1e-14 seen)."""
     from rc3r.design.rule import DEFAULT_MARGIN
 
-    ur5, theta0, light = _light_wrist_ur5(0.1)
+    ur5, theta0, light = _light_wrist_ur5(0.02)
     np.testing.assert_allclose(ur5.regressor(*(np.full(6, 0.3),) * 4) @ theta0,
                                __import__("pinocchio").rnea(light, light.createData(), *(np.full(6, 0.3),) * 3),
                                atol=1e-9)  # theta_0 is the light model's, by Pinocchio
@@ -574,4 +576,4 @@ def test_default_gains_hold_the_loop_on_a_controller_model_lighter_than_the_robo
     heavy, _ = sampled_gains("robust-coeff", ur5, traj, {"theta0": list(ur5.theta), "rho_i": list(rho_i)}, rate,
                              duration=dur)
     assert gains["eps_i"] > heavy["eps_i"]
-    assert _held_loop_figure(light, ur5, traj, theta0, heavy, rho_i, rate, DEFAULT_MARGIN, dur) > 1.0
+    assert _held_loop_figure(light, ur5, traj, theta0, heavy, rho_i, rate, DEFAULT_MARGIN, dur) > 1.5

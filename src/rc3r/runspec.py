@@ -443,7 +443,7 @@ def _joint_outside(act: dict) -> str | None:
         return None
     name = list(act["coefficient_names"])[p + k]
     return (f"the plant has no joint friction but the bounds' centre has: {name} = {th[k]:.3g} is {ratio[k]:.3g} "
-            f"rho_i from 0, so the law compensates friction this plant lacks (the default plant, centre, is the identified arm)")
+            f"rho_i from 0, so the law compensates friction this plant lacks (--plant centre runs the identified arm)")
 
 
 def _check_bounds_robot(bf: dict, robot: str | None, urdf) -> None:
