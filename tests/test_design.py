@@ -577,3 +577,23 @@ def test_default_gains_hold_the_loop_on_a_controller_model_lighter_than_the_robo
                              duration=dur)
     assert gains["eps_i"] > heavy["eps_i"]
     assert _held_loop_figure(light, ur5, traj, theta0, heavy, rho_i, rate, DEFAULT_MARGIN, dur) > 1.5
+
+
+def test_ellipsoid_law_figure_and_gains_against_a_hand_computed_case():
+    """robust-ellipsoid inside its layer has G = K + Y P^-1 Y^T / (eps rho_P). By hand with M = diag(2, 0.5),
+    Y = I, P = diag(1/9, 1/16): P^-1 = diag(9, 16), rho_P = sqrt(16) = 4, L_P = max(9/2, 16/0.5) = 32; the
+    constant K of the diag fast form is (100, 25) (L_K = 50) at 1 kHz, margin 1, so the rule's eps is
+    T L_P / (rho_P (1 - T L_K)) = 0.008 / 0.95 and check() of that law is exactly 1; half that eps gives
+    T (50 + 32 / (eps rho_P)) = 0.05 + 1.9 = 1.95."""
+    from rc3r.design.rule import _ellipsoid_gains
+
+    sp = _hand_spectrum()
+    P = np.diag([1 / 9, 1 / 16])
+    assert sp.lam_yy(np.linalg.inv(P)) == pytest.approx(32.0, rel=1e-12)
+    d = fast_design(sp, 1000.0, rho=0.0, coupling="diag")
+    g = _ellipsoid_gains(d, sp, rc3r.make_law("robust-ellipsoid", np.zeros(2), P=P))
+    assert g["eps"] == pytest.approx(0.008 / 0.95, rel=1e-12) and g["K"] == pytest.approx([100.0, 25.0])
+    law = rc3r.make_law("robust-ellipsoid", np.zeros(2), P=P, **g)
+    assert check(law, sp, 1000.0) == pytest.approx(1.0, rel=1e-12)
+    half = rc3r.make_law("robust-ellipsoid", np.zeros(2), P=P, **{**g, "eps": g["eps"] / 2})
+    assert check(half, sp, 1000.0) == pytest.approx(1.95, rel=1e-12)

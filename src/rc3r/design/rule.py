@@ -78,6 +78,8 @@ B_MAX = B_OVER_LAMBDA * LAMBDA_MAX
 K_SHARE = 0.25
 #: The margin of the defaults of sampled runs (:func:`sampled_gains`), ``rc3r design --margin``'s default.
 DEFAULT_MARGIN = 2.0
+#: The ellipsoid law (eq. 6 over ``||theta - theta_0||_P <= 1``): the defaults of sampled runs design it too.
+ELLIPSOID = "robust-ellipsoid"
 #: The adaptive law's gain is never above the default's.
 GAMMA_MAX = 10.0
 
@@ -147,13 +149,15 @@ class Spectrum:
         return float(min(np.linalg.eigvalsh(Li @ A @ Li.T)[0] for Li in self.chol_inv))
 
     def lam_yy(self, weights=None) -> float:
-        """:math:`\\max_t \\lambda_{\\max}(M^{-1} Y W Y^T)`, W = diag(weights) (p,) or I."""
+        """:math:`\\max_t \\lambda_{\\max}(M^{-1} Y W Y^T)`, W = diag(weights) (p,), a positive definite
+        (p, p) matrix (the ellipsoid law's :math:`P^{-1}`), or I."""
         key = None if weights is None else np.asarray(weights, dtype=float).tobytes()
         if key not in self._cache:
-            w = None if weights is None else np.sqrt(np.asarray(weights, dtype=float))
+            W = None if weights is None else np.asarray(weights, dtype=float)
+            w = None if W is None else np.linalg.cholesky(0.5 * (W + W.T)) if W.ndim == 2 else np.sqrt(W)
             vals = []
             for Li, Y in zip(self.chol_inv, self.Y):
-                B = Li @ (Y if w is None else Y * w)
+                B = Li @ (Y if w is None else Y @ w if w.ndim == 2 else Y * w)
                 vals.append(np.linalg.eigvalsh(B @ B.T)[-1])
             self._cache[key] = float(max(vals))
         return self._cache[key]
@@ -338,6 +342,7 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
     also :math:`T'\\Lambda` (the error's own mode) counts. A law the rule does not know gives nan.
     """
     from ..controllers import Adaptive, FeedbackLinearization, PDGravity, PDPlus, Robust, RobustPerCoefficient
+    from ..controllers.ellipsoid import RobustEllipsoid
 
     rate, margin = _check_rate(rate, margin)
     Tm, a, n = margin / rate, real_limit(delay), spec.n
@@ -357,6 +362,9 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
             gmax = float(np.max(law.Gamma))
             fig = Tm * (L_K + gmax * spec.lam_yy() / max(spec.lam_min(vec(law.K)) + law.K_inertia, 1e-300))
         return max(fig, Tm * lam) / a
+    if isinstance(law, RobustEllipsoid):  # inside its layer delta = -P^-1 Y^T r / (eps rho_P): G = K + Y P^-1 Y^T / ..
+        fig = Tm * (spec.lam(vec(law.K)) + spec.lam_yy(law._Pinv) / (law.eps * law.rho_P))
+        return max(fig, Tm * float(np.max(law.Lambda))) / a
     if isinstance(law, FeedbackLinearization):  # e'' + Kd e' + Kp e = 0, per joint: its fastest pole
         kp, kd = vec(law.Kp), vec(law.Kd)
         disc = np.sqrt(np.maximum(kd ** 2 - 4 * kp, 0.0))
@@ -365,6 +373,17 @@ def check(law, spec: Spectrum, rate: float, delay: int = 0, margin: float = 1.0)
     if isinstance(law, (PDGravity, PDPlus)):  # the held loop M qdd = -Kd qd: T lambda_max(M^-1 Kd)
         return Tm * spec.lam(vec(law.Kd)) / a
     return math.nan
+
+
+def _ellipsoid_gains(design: Design, spec: Spectrum, law) -> dict:
+    """``robust-ellipsoid``'s gains from a fast form with a constant K (the law has no scheduled K): its
+    boundary layer makes :math:`T'\\lambda_{\\max}(M^{-1}(K + Y P^{-1} Y^T / (\\epsilon\\rho_P)))` the real
+    limit, :math:`\\epsilon = T' L_P / (\\rho_P (a_d - T' L_K))` with :math:`L_P = \\max_t\\lambda_{\\max}(M^{-1}
+    Y P^{-1} Y^T)` (``law``: the ellipsoid law with its P, for ``_Pinv`` and ``rho_P``)."""
+    Tm = design.margin / design.rate
+    room = real_limit(design.delay) - Tm * design.L_K
+    eps = Tm * spec.lam_yy(law._Pinv) / (law.rho_P * room)
+    return {"K": np.asarray(design.K, dtype=float).tolist(), "Lambda": float(design.Lambda), "eps": float(eps)}
 
 
 def _models(robot, theta0) -> list:
@@ -398,10 +417,10 @@ def sampled_gains(kind: str, robot, trajectory, model: dict, rate: float, *, del
     """
     from ..controllers import make_law
 
-    if kind not in DESIGNED_LAWS:
+    if kind not in DESIGNED_LAWS + (ELLIPSOID,):
         return None, None
     rho, rho_i = model.get("rho"), model.get("rho_i")
-    if kind == "robust-coeff" and rho_i is None:
+    if kind == "robust-coeff" and rho_i is None or kind == ELLIPSOID and model.get("P") is None:
         return None, None
     key = (kind, robot.label, robot.urdf, robot.n, robot.p,
            np.asarray(robot.theta, float).tobytes(), trajectory.pack().tobytes(), float(rate), int(delay),
@@ -412,15 +431,17 @@ def sampled_gains(kind: str, robot, trajectory, model: dict, rate: float, *, del
         spec = _CACHE.get(skey)
         if spec is None:
             spec = _CACHE[skey] = spectrum(_models(robot, model.get("theta0")), trajectory, duration)
-        default = make_law(kind, model["theta0"], rho=rho, rho_i=rho_i)
+        default = make_law(kind, model["theta0"], rho=rho, rho_i=rho_i, **({"P": model["P"]} if kind == ELLIPSOID
+                                                                           else {}))
         fig = check(default, spec, rate, delay, margin)
         if fig <= 1.0:
             _CACHE[key] = ({}, f"default gains (the sampled-data rule passes them at {rate / margin:g} Hz: "
                                f"{fig:.2g} <= 1)")
         else:
             design = fast_design(spec, rate, rho=rho if rho is not None else 0.0, rho_i=rho_i, delay=delay,
-                                 margin=margin)
-            _CACHE[key] = (design.gains(kind), f"gains of the sampled-data rule for {rate:g} Hz (the defaults "
+                                 margin=margin, coupling="diag" if kind == ELLIPSOID else "inertia")
+            gains = _ellipsoid_gains(design, spec, default) if kind == ELLIPSOID else design.gains(kind)
+            _CACHE[key] = (gains, f"gains of the sampled-data rule for {rate:g} Hz (the defaults "
                                                f"fail it: {fig:.2g} > 1; rc3r design verifies a design)")
     gains, note = _CACHE[key]
     return dict(gains), note
