@@ -173,6 +173,7 @@ def test_cli_prints_and_records_the_choice_and_refuses_bad_settings(tmp_path, mo
     from rc3r.cli import main
     from rc3r.identify.bounds_file import load_bounds
     from rc3r.identify.log import Log, save_log
+    from rc3r.identify.selection import SLOW_SHARES
 
     log, _ = sample_log(motion, seed=0)
     path = tmp_path / "log.csv"
@@ -189,6 +190,9 @@ def test_cli_prints_and_records_the_choice_and_refuses_bad_settings(tmp_path, mo
     assert f"{sel['chosen']['score']:.4f}" in printed
     ident = load_bounds(out / "bounds.toml")["identification"]
     assert ident["coulomb_velocity"] == law["coulomb_velocity"] and "tanh" in ident["coulomb_law"]
+    # every chosen setting is in bounds.toml's record, as identified.json's filter has it
+    assert (ident["velocities"], ident["weighting"], ident["slow_share"]) == (
+        filt["velocities"], filt["weighting"], filt["slow_share"]) and filt["slow_share"] in SLOW_SHARES
     for argv, match in ((["--coulomb-velocity", "-1"], "must be >= 0"), (["--weighting", "heavy"], "invalid choice")):
         assert main(["identify", str(path), "--robot", "rr3", "--out", str(tmp_path / "o"), *argv]) == 2
         err = capsys.readouterr().err

@@ -156,6 +156,7 @@ def cmd_identify(args) -> int:
              "filter_chosen": res.filter["chosen"], "sigma": res.sigma.tolist(), "friction": list(res.friction_kinds),
              "covariance": args.covariance, "quantile": bounds["quantile"],
              "velocities": res.filter["velocities"], "weighting": res.filter["weighting"],
+             "slow_share": res.filter["slow_share"],
              "armature": bool((res.armature or {}).get("fitted")),
              "coulomb_law": res.friction_law["coulomb"], "coulomb_velocity": res.friction_law["coulomb_velocity"],
              "estimate": "physically consistent (log-Cholesky, log-det prior)" if "physical" in bounds else
