@@ -69,10 +69,13 @@ def test_the_default_plant_of_identified_bounds_is_their_centre(bounds_file, tmp
     assert b["physical"] is not None
     for extra, plant in (([], "centre"), (["--plant", "nominal"], "nominal")):
         out = tmp_path / plant
-        assert main(["run", "--controller", "robust", "--bounds", str(bounds_file), "--duration", "0.2",
-                     "--out", str(out)] + extra) == 0, capsys.readouterr().err
+        code = main(["run", "--controller", "robust", "--bounds", str(bounds_file), "--duration", "0.2",
+                     "--out", str(out)] + extra)
+        err = capsys.readouterr().err
+        assert code == 0, err
         m = json.loads((out / "metrics.json").read_text())
         assert m["plant"] == plant
+        assert ("(the identified robot: the bounds' centre)" in err) is (plant == "centre"), err
     spec = rc3r.build_run(controller="robust", bounds=str(bounds_file), duration=0.2)
     full = (b["actuator"] or b)["theta0"]  # rigid then joint coefficients (format /2), as the plant's theta
     np.testing.assert_allclose(spec.true_rigid.theta, full, rtol=1e-6, atol=1e-9)

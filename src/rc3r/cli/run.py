@@ -139,6 +139,8 @@ def describe_model(spec) -> str:
     plant = f"plant '{spec.true_rigid.label}'"
     if spec.true_rigid.label == model.get("nominal"):
         plant += " (the nominal robot)"
+    elif spec.true_rigid.label == "centre" and "bounds" in (model.get("theta_source") or ""):
+        plant += " (the identified robot: the bounds' centre)"
     if spec.scenario != "perturbed" and (model.get("theta_source") or "").startswith("theta of the plant"):
         return f"{plant}; controller model = the plant's theta (ideal)" + _effects_text(spec)
     short = lambda src: (src or "").split(":")[0]  # noqa: E731 - the source up to its formula
