@@ -31,7 +31,8 @@ squares, no cross-validation, no consistent fit) over every cut-off the log's ra
 and, stricter, each joint's own minimum over all those settings (a minimum over 28-84 noisy held-out
 figures: biased low).
 Then ``rc3r design (--robot | --urdf) --bounds ID/bounds.toml --rate 1000 --n 2 --duration 0.5``: accepted
-(exit 0) or its one-line refusal.
+(exit 0) or its one-line refusal; with ``--run LAWS``, ``rc3r run`` of each law at 1 kHz on the bounds with its
+defaults (plant: the identified arm, the bounds' centre), its summary line.
 
 The plain fits are most of the cost (42 fits of the 2 kHz UR5, 84 of the xArm7: 4-6 minutes per seed on the
 shared two-core machine); ``--plain-cache FILE`` keeps them by arm and seed (they depend on the seeded log and
@@ -185,6 +186,18 @@ def run_cli(args, log_path, out, arm_args, extra=()):
     return data, wall, verdict
 
 
+def run_laws(args, out, arm_args) -> list[str]:
+    """``rc3r run (--robot | --urdf) --bounds OUT/bounds.toml --controller LAW --rate 1000`` for each law of
+    ``--run`` (default plant: the bounds' centre, the identified arm with its friction): its summary line."""
+    lines = []
+    for law in filter(None, args.run.split(",")):
+        r = subprocess.run(CLI + ["run", *arm_args, "--bounds", str(out / "bounds.toml"), "--controller", law,
+                                  "--rate", "1000", "--out", str(out / f"run-{law}")], capture_output=True, text=True)
+        last = ((r.stdout.strip() or r.stderr.strip()).splitlines() or ["(no output)"])[-1]  # the verdict line
+        lines.append(f"rc3r run --controller {law} --rate 1000 (exit {r.returncode}): {last[:400]}")
+    return lines
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=0, help="seed of the trajectories and the logs (default 0)")
@@ -195,6 +208,9 @@ def main(argv=None) -> int:
     ap.add_argument("--slow-share", default="auto",
                     help="comma-separated values of identify's --slow-share to measure; auto: the option not given "
                          "(identify's default, chosen by cross-validation; default auto)")
+    ap.add_argument("--run", default="", metavar="LAWS",
+                    help="comma-separated laws to run at 1 kHz on each result's bounds with rc3r run's defaults "
+                         "(its plant: the identified arm; e.g. robust-coeff; default: none)")
     ap.add_argument("--plain-cache", metavar="JSON",
                     help="keep the best plain fits (the costly part: 42-84 fits per arm) in this file, keyed by arm "
                          "and seed, and reuse them from it (they depend on the log and the plain grid only)")
@@ -241,6 +257,8 @@ def main(argv=None) -> int:
                                                                   ["armature"]) + " (true " +
                           " ".join(f"{x:g}" for x in spec["armature"]) + ")")
                 print(f"  rc3r design --bounds: {verdict}")
+                for line in run_laws(args, Path(tmp) / f"{name}-{share}", arm_args):
+                    print(f"  {line}")
     for share in worst:
         print(f"\n--slow-share {share}: worst ratio, any joint, of the default's or the bounds' estimate's RMS: to the "
               f"best plain OLS fit {worst[share]:.3f} ({'within' if worst[share] <= 1.15 else 'beyond'} 15 %); to the "
