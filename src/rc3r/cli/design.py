@@ -154,7 +154,10 @@ def cmd_design(args) -> int:
         raise ConfigError(f"{out} holds an earlier result; give --force to replace it, or another --out")
     command = "rc3r " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:2] == ["design"] else ""
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
-    arm = getattr(first.controller_model, "rigid", first.controller_model).label  # an identified arm: its rigid body
+    from ..robots.actuated import ActuatedRobot
+
+    model = first.controller_model  # an identified arm (friction, armature): named by its rigid body
+    arm = (model.rigid if isinstance(model, ActuatedRobot) else model).label
     print(f"rc3r design: {first.true_rigid.n}-joint arm '{arm}', {args.rate:g} Hz (margin "
           f"{args.margin:g}), {args.n} random plants, {first.options.duration:g} s each, on {where} -> {out}/",
           file=sys.stderr)
