@@ -535,7 +535,7 @@ def _light_wrist_ur5(scale: float = 0.1):
     return ur5, ur5.theta_of_standard(std), model
 
 
-def _held_loop_figure(model, ur5, traj, theta0, gains, rho_i, rate, margin, duration):
+def _held_loop_figure(model, ur5, traj, gains, rho_i, rate, margin, duration):
     """max over the reference of (margin / rate) lambda_max(M^-1 G), G = b M + Y diag(rho_i / eps_i) Y^T,
     with M from ``pinocchio.crba`` on ``model`` (the plant is the controller's model theta_0)."""
     import pinocchio as pin
@@ -561,22 +561,24 @@ def test_default_gains_hold_the_loop_on_a_controller_model_lighter_than_the_robo
     gains. Gains designed on the robot's M alone (theta_0 = the robot's theta: the rule before) put the
     same figure above 1 on the light model (measured 2.22): the lighter model must be in the spectrum.
     Tolerance 1e-6: the designed figure is 1 at its worst sample up to eigensolver rounding (1e-14 seen)."""
+    import pinocchio as pin
+
     from rc3r.design.rule import DEFAULT_MARGIN
 
     ur5, theta0, light = _light_wrist_ur5(0.02)
-    np.testing.assert_allclose(ur5.regressor(*(np.full(6, 0.3),) * 4) @ theta0,
-                               __import__("pinocchio").rnea(light, light.createData(), *(np.full(6, 0.3),) * 3),
+    x = np.full(6, 0.3)
+    np.testing.assert_allclose(ur5.regressor(x, x, x, x) @ theta0, pin.rnea(light, light.createData(), x, x, x),
                                atol=1e-9)  # theta_0 is the light model's, by Pinocchio
     traj, rate, dur = ur5.default_trajectory(), 1000.0, 2.0
     rho_i = 0.2 * np.abs(theta0) + 1e-3
     gains, _ = sampled_gains("robust-coeff", ur5, traj, {"theta0": list(theta0), "rho_i": list(rho_i)}, rate,
                              duration=dur)
-    fig = _held_loop_figure(light, ur5, traj, theta0, gains, rho_i, rate, DEFAULT_MARGIN, dur)
+    fig = _held_loop_figure(light, ur5, traj, gains, rho_i, rate, DEFAULT_MARGIN, dur)
     assert fig <= 1.0 + 1e-6
     heavy, _ = sampled_gains("robust-coeff", ur5, traj, {"theta0": list(ur5.theta), "rho_i": list(rho_i)}, rate,
                              duration=dur)
     assert gains["eps_i"] > heavy["eps_i"]
-    assert _held_loop_figure(light, ur5, traj, theta0, heavy, rho_i, rate, DEFAULT_MARGIN, dur) > 1.5
+    assert _held_loop_figure(light, ur5, traj, heavy, rho_i, rate, DEFAULT_MARGIN, dur) > 1.5
 
 
 def test_ellipsoid_law_figure_and_gains_against_a_hand_computed_case():

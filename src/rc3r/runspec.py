@@ -326,7 +326,7 @@ def build_run(*, robot: str | None = None, controller: str | None = None, pertur
 
     box_bounds.urdf_uncertainty = _urdf_spec(plant_cfg.get("urdf_uncertainty"))  # checked; None: none
     spec = plant or plant_cfg.get("spec", "nominal")
-    default_plant = plant is None and not {"spec", "urdf"} & set(plant_cfg)  # bounds with a physical centre: it
+    default_plant = plant is None and not {"spec", "urdf"} & set(plant_cfg)  # no plant named (see the bounds below)
     if "urdf" in plant_cfg and spec == "nominal":
         spec = str(plant_cfg["urdf"])
     if spec == "random":

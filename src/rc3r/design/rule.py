@@ -182,7 +182,8 @@ def spectrum(robot, trajectory, duration: float = 10.0, *, scaling: str = "free"
     N = samples or int(np.clip(round(40 * duration) + 1, 101, 2001))
     t = np.linspace(0.0, float(duration), N)
     qd, vd, ad = trajectory.evaluate(t)
-    Ls, Ys, ts, dmax = [], [], [], np.zeros(models[0].n)
+    Ys = np.array([models[0].regressor(qd[k], vd[k], vd[k], ad[k]) for k in range(N)])  # kinematics: every model's
+    Ls, dmax = [], np.zeros(models[0].n)
     lo, hi = np.inf, 0.0
     for model in models:
         for k in range(N):
@@ -193,14 +194,14 @@ def spectrum(robot, trajectory, duration: float = 10.0, *, scaling: str = "free"
                 raise ParameterError(f"the model's mass matrix is not positive definite at t = {t[k]:g} s") from None
             Li = np.linalg.inv(L)  # M^-1 = Li^T Li
             Ls.append(Li)
-            Ys.append(model.regressor(qd[k], vd[k], vd[k], ad[k]))
-            ts.append(t[k])
             ev = np.linalg.eigvalsh(M)
             lo, hi = min(lo, ev[0]), max(hi, ev[-1])
             dmax = np.maximum(dmax, np.sum(Li * Li, axis=0))  # (M^-1)_jj = sum_i Li_ij^2
     M0 = models[0].mass_matrix(qd[0])
     kappa = 1.0 / np.diag(np.linalg.inv(M0)) if scaling == "free" else np.diag(M0).copy()
-    return Spectrum(np.array(ts), np.array(Ls), np.array(Ys), kappa, scaling, float(lo), float(hi), dmax, M0.copy())
+    k = len(models)
+    return Spectrum(np.tile(t, k), np.array(Ls), np.tile(Ys, (k, 1, 1)), kappa, scaling, float(lo), float(hi), dmax,
+                    M0.copy())
 
 
 @dataclass(frozen=True)
