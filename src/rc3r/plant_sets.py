@@ -212,10 +212,13 @@ def _actuated_bounds_plant(nominal, bf: dict, spec: str):
     slice at that rigid part (seed ``SeedSequence([s, 35])``), its viscous, Coulomb and armature
     coefficients clipped at 0 (:func:`_clip_joint`; a rejection of draws with any of them negative found
     none in 200 on a real Panda's bounds: 28 joint coefficients, seven armatures centred at 0);
-    ``lightest:...``: the full ellipsoid's lightest point, its joint part clipped at 0 where negative."""
+    ``lightest:...``: the full ellipsoid's lightest point, its rigid part realised as a ``lightest:`` plant of
+    :func:`_bounds_plant` (physical link parameters inside the ellipsoid, the point pulled toward theta_0 by
+    the first fraction of :data:`~rc3r.uncertainty.ellipsoid.PULL` that allows it), its joint part pulled by the
+    same fraction and clipped at 0 where negative."""
     from .errors import ParameterError
     from .uncertainty.box import spec_seed
-    from .uncertainty.ellipsoid import lightest_theta, realise_theta
+    from .uncertainty.ellipsoid import lightest_theta, realise_theta, realise_toward
 
     act, p = bf["actuator"], nominal.p
     model = actuated_model(nominal, act)
@@ -228,14 +231,20 @@ def _actuated_bounds_plant(nominal, bf: dict, spec: str):
         if why:
             raise ParameterError(f"the centre of {source} is no plant: {why}")
         return model.with_rigid(_bounds_plant(nominal, bf, spec), "centre")
-    if kind == "lightest":
+    if kind == "lightest":  # the rigid part as without joint coefficients: in the physical chart, pulled inside
         theta = lightest_theta(model, theta0, P, arg, spec)
-        joint = _clip_joint(model, theta[p:], nominal.n)
-        try:
-            rigid = realise_theta(nominal, theta[:p], label=spec)
-            rigid.require_simulable()
-        except ParameterError as exc:
-            raise ParameterError(f"plant {spec!r}: no simulable robot near '{nominal.label}' realises it: {exc}") from None
+        got = realise_toward(nominal, bf["theta0"], bf["P"], theta[:p], physical=bf.get("physical"), source=source,
+                             spec=spec)  # the projection's ellipsoid holds the rigid part of a point of the full one
+        if got is None:  # no link parameters in the file (the 3R): the robot nearest the URDF's
+            try:
+                rigid = realise_theta(nominal, theta[:p], label=spec)
+                rigid.require_simulable()
+            except ParameterError as exc:
+                raise ParameterError(f"plant {spec!r}: no simulable robot near '{nominal.label}' realises it: "
+                                     f"{exc}") from None
+            got = (rigid, 1.0)
+        rigid, f = got
+        joint = _clip_joint(model, theta0[p:] + f * (theta[p:] - theta0[p:]), nominal.n)  # pulled as the rigid part
         return model.with_rigid(rigid, spec).with_joint(joint, spec)
     if kind not in ("random", "boundary"):
         from .uncertainty.ellipsoid import ELLIPSOID_SPECS

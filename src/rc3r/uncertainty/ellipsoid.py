@@ -56,7 +56,8 @@ from ..errors import ConfigError, ParameterError
 from ..identify.estimate import draw_theta, ellipsoid_factor  # re-exported: the ellipsoid's own numerics
 
 __all__ = ["MAX_DRAWS", "ELLIPSOID_SPECS", "MASS_SAMPLES", "ellipsoid_factor", "draw_theta", "realise_theta",
-           "draw_from_ellipsoid", "lightest_theta", "mass_matrix_of", "require_positive_mass_matrix"]
+           "draw_from_ellipsoid", "lightest_theta", "realise_toward", "PULL", "mass_matrix_of",
+           "require_positive_mass_matrix"]
 
 #: Reference samples at which a model's mass matrix is checked positive definite.
 MASS_SAMPLES = 200
@@ -306,11 +307,54 @@ def lightest_theta(robot, theta0, P, arg: str, spec: str = "") -> np.ndarray:
     return theta0 if norm == 0.0 else theta0 - s * Pinv_g / norm
 
 
-def _draw_physical(robot, theta0, P, spec, kind, arg, chart, source):
-    """:func:`draw_from_ellipsoid` with link parameters realised in the log-Cholesky chart (module docstring)."""
+#: Fractions of the way from theta_0 to a ``lightest:`` point tried in turn until the nearest physical link
+#: parameters lie in the ellipsoid (:func:`realise_toward`).
+PULL = (1.0, 0.75, 0.5, 0.25)
+
+
+def _realised(robot, theta, theta0, P, chart, spec):
+    """The plant of the physical link parameters nearest ``theta`` (the chart's Gauss-Newton), or None when
+    they leave the ellipsoid ``(P, theta0)`` or cannot be simulated."""
     from ..identify.physical import realise_log_cholesky, standard_of
 
-    T, eta0, S, pi0 = chart
+    T, eta0, S, _ = chart
+    pi = standard_of(realise_log_cholesky(T, theta, eta0, S, best=True))
+    d = T @ pi - theta0
+    if not d @ P @ d <= 1.0 + 1e-9:
+        return None
+    try:
+        plant = robot.with_standard_parameters(pi, spec)
+        plant.require_simulable()
+        return plant
+    except ParameterError:
+        return None
+
+
+def realise_toward(robot, theta0, P, target, *, physical, source: str = "the bounds", spec: str = ""):
+    """``(plant, f)``: the plant of the physical link parameters nearest ``theta0 + f (target - theta0)`` for the
+    first ``f`` of :data:`PULL` where they lie in the ellipsoid and simulate (the log-Cholesky chart of the
+    bounds' ``[physical]`` table: every such plant is a rigid body), as ``rc3r design``'s worst-plant search
+    needs for a ``lightest:`` point; None when the bounds have no link parameters for ``robot`` (the 3R);
+    ParameterError when no ``f`` gives one."""
+    chart = _physical_chart(robot, theta0, physical, source)
+    if chart is None:
+        return None
+    return _pulled(robot, np.asarray(theta0, dtype=float), np.asarray(P, dtype=float),
+                   np.asarray(target, dtype=float), chart, spec, source)
+
+
+def _pulled(robot, theta0, P, target, chart, spec, source):
+    """:func:`realise_toward` on a chart: ``(plant, f)`` or ParameterError."""
+    for f in PULL:
+        plant = _realised(robot, theta0 + f * (target - theta0), theta0, P, chart, spec)
+        if plant is not None:
+            return plant, f
+    raise ParameterError(f"plant {spec!r}: no physical link parameters inside the ellipsoid of {source} realise it")
+
+
+def _draw_physical(robot, theta0, P, spec, kind, arg, chart, source):
+    """:func:`draw_from_ellipsoid` with link parameters realised in the log-Cholesky chart (module docstring)."""
+    pi0 = chart[3]
     if kind in ("centre", "center") and not arg:
         plant = robot.with_standard_parameters(pi0, "centre")
         try:
@@ -320,36 +364,15 @@ def _draw_physical(robot, theta0, P, spec, kind, arg, chart, source):
         return plant
     P = np.asarray(P, dtype=float)
     theta0 = np.asarray(theta0, dtype=float)
-
-    def realised(theta):
-        """The plant of the physical link parameters nearest ``theta`` (the chart's Gauss-Newton), or None when
-        they leave the ellipsoid or cannot be simulated."""
-        pi = standard_of(realise_log_cholesky(T, theta, eta0, S, best=True))
-        d = T @ pi - theta0
-        if not d @ P @ d <= 1.0 + 1e-9:
-            return None
-        try:
-            plant = robot.with_standard_parameters(pi, spec)
-            plant.require_simulable()
-            return plant
-        except ParameterError:
-            return None
-
     if kind == "lightest":  # rc3r design's worst plant: the nearest physical point, pulled inside if need be
-        target = lightest_theta(robot, theta0, P, arg, spec)
-        for f in (1.0, 0.75, 0.5, 0.25):
-            plant = realised(theta0 + f * (target - theta0))
-            if plant is not None:
-                return plant
-        raise ParameterError(f"plant {spec!r}: no physical link parameters inside the ellipsoid of {source} "
-                             "realise it")
+        return _pulled(robot, theta0, P, lightest_theta(robot, theta0, P, arg, spec), chart, spec, source)[0]
     if kind not in ("random", "boundary"):
         raise ConfigError(f"bad plant {spec!r} with bounds from {source}: expected nominal, {ELLIPSOID_SPECS}")
     from .box import spec_seed
 
     rng = np.random.default_rng(spec_seed(spec, kind, arg, "bad plant"))
     for _ in range(MAX_DRAWS):
-        plant = realised(draw_theta(theta0, P, rng, boundary=kind == "boundary"))
+        plant = _realised(robot, draw_theta(theta0, P, rng, boundary=kind == "boundary"), theta0, P, chart, spec)
         if plant is not None:  # the nearest physical coefficients reached lie in the ellipsoid and simulate
             return plant
     raise ParameterError(f"plant {spec!r}: no physical link parameters realise any of {MAX_DRAWS} draws from the "
